@@ -1,0 +1,78 @@
+"""Exception types raised by handdb.
+
+Every error a user can cause with bad input is an :class:`InputError` that names the
+file, the line (1-based, where the format has lines) and the field at fault, so that the
+message alone says what to fix. The build turns these into ``quarantine`` rows.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+
+class HanddbError(Exception):
+    """Base class of every error handdb raises on purpose."""
+
+
+class InputError(HanddbError):
+    """Input that handdb refuses, located as precisely as the format allows.
+
+    Parameters
+    ----------
+    file
+        The file at fault.
+    reason
+        What is wrong, phrased so the user knows what to change.
+    line
+        1-based line number in ``file``, or ``None`` for formats without lines
+        (a JSON document, a binary file) or for whole-file problems.
+    field
+        The column, key or parameter at fault, or ``None``.
+    clip_id
+        The clip the file belongs to, when known.
+    """
+
+    def __init__(
+        self,
+        file: str | Path,
+        reason: str,
+        *,
+        line: int | None = None,
+        field: str | None = None,
+        clip_id: str | None = None,
+    ) -> None:
+        self.file = str(file)
+        self.reason = reason
+        self.line = line
+        self.field = field
+        self.clip_id = clip_id
+        super().__init__(self._format())
+
+    def _format(self) -> str:
+        where = self.file if self.line is None else f"{self.file}:{self.line}"
+        what = f" field '{self.field}':" if self.field else ""
+        return f"{where}:{what} {self.reason}"
+
+
+class SkeletonError(HanddbError):
+    """A skeleton topology that is unknown or inconsistent."""
+
+
+class SchemaError(HanddbError):
+    """A table that does not match its contract in ``schemas/tables``."""
+
+
+class StoreError(HanddbError):
+    """The database folder cannot be read or written as asked."""
+
+
+class DatabaseLockedError(StoreError):
+    """Another build holds the database lock."""
+
+
+class BoneLengthError(HanddbError):
+    """No bone lengths can be had for a clip."""
+
+
+class StageError(HanddbError):
+    """A pipeline stage could not process a clip (the message says why)."""

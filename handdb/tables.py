@@ -1,0 +1,145 @@
+"""Arrow schemas of the database tables, read from ``schemas/tables/*.json``.
+
+Each table's contract is a JSON file: its fields (name, Arrow type, nullability, doc),
+how it is partitioned on disk (``clip``: one file per clip; ``global``: one file;
+``source``: one file per input file; ``run``: one file per run) and its sort order.
+Code builds tables with :func:`from_columns` or checks them with :func:`conform`, so what is
+written always matches the contract.
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass
+from functools import cache
+from typing import Any
+
+import pyarrow as pa
+
+from handdb.errors import SchemaError
+from handdb.paths import SCHEMAS_DIR
+
+TABLES_DIR = SCHEMAS_DIR / "tables"
+
+_SCALAR_TYPES: dict[str, pa.DataType] = {
+    "string": pa.string(),
+    "bool": pa.bool_(),
+    "int16": pa.int16(),
+    "int32": pa.int32(),
+    "int64": pa.int64(),
+    "float32": pa.float32(),
+    "float64": pa.float64(),
+    "timestamp[us, UTC]": pa.timestamp("us", tz="UTC"),
+}
+
+
+def _arrow_type(name: str) -> pa.DataType:
+    if name.startswith("list<") and name.endswith(">"):
+        return pa.list_(_arrow_type(name[5:-1]))
+    try:
+        return _SCALAR_TYPES[name]
+    except KeyError:
+        raise SchemaError(f"unknown type '{name}' in {TABLES_DIR}") from None
+
+
+@dataclass(frozen=True)
+class TableSpec:
+    """A table's contract: schema, on-disk partitioning and sort order."""
+
+    name: str
+    schema: pa.Schema
+    partition: str
+    sort_by: tuple[str, ...]
+    description: str
+
+
+def table_names() -> tuple[str, ...]:
+    """Names of every table with a contract in ``schemas/tables``."""
+    return tuple(sorted(p.stem for p in TABLES_DIR.glob("*.json")))
+
+
+@cache
+def table_spec(name: str) -> TableSpec:
+    """Return the contract of table ``name``."""
+    path = TABLES_DIR / f"{name}.json"
+    if not path.is_file():
+        raise SchemaError(f"no table '{name}'; tables: {', '.join(table_names())}")
+    doc = json.loads(path.read_text())
+    fields = [
+        pa.field(f["name"], _arrow_type(f["type"]), nullable=f["nullable"],
+                 metadata={"doc": f.get("doc", "")})
+        for f in doc["fields"]
+    ]
+    return TableSpec(
+        name=name,
+        schema=pa.schema(fields, metadata={"table": name, "description": doc["description"]}),
+        partition=doc["partition"],
+        sort_by=tuple(doc["sort_by"]),
+        description=doc["description"],
+    )
+
+
+def schema(name: str) -> pa.Schema:
+    """Arrow schema of table ``name``."""
+    return table_spec(name).schema
+
+
+def empty(name: str) -> pa.Table:
+    """An empty table with the schema of ``name``."""
+    return schema(name).empty_table()
+
+
+def conform(name: str, table: pa.Table) -> pa.Table:
+    """Check ``table`` against the contract of ``name`` and return it in contract form.
+
+    Columns are put in contract order and cast to the contract types where the cast is
+    safe; the rows are sorted by the contract's sort order so that equal inputs give
+    byte-identical files.
+
+    Raises
+    ------
+    SchemaError
+        On a missing or extra column, an unsafe cast, or a null in a non-nullable column.
+    """
+    target = schema(name)
+    missing = [f.name for f in target if f.name not in table.column_names]
+    extra = [c for c in table.column_names if c not in target.names]
+    if missing or extra:
+        raise SchemaError(
+            f"table '{name}': missing columns {missing}, unexpected columns {extra}"
+        )
+    columns = []
+    for fld in target:
+        column = table.column(fld.name)
+        if not fld.nullable and column.null_count:
+            raise SchemaError(f"table '{name}': column '{fld.name}' has "
+                              f"{column.null_count} nulls but is not nullable")
+        try:
+            columns.append(column.cast(fld.type, safe=True))
+        except (pa.ArrowInvalid, pa.ArrowNotImplementedError) as exc:
+            raise SchemaError(f"table '{name}': column '{fld.name}' cannot be "
+                              f"{fld.type}: {exc}") from None
+    result = pa.Table.from_arrays(columns, schema=target)
+    keys = [(k, "ascending") for k in table_spec(name).sort_by]
+    return result.sort_by(keys) if result.num_rows > 1 else result
+
+
+def from_columns(name: str, columns: dict[str, Any]) -> pa.Table:
+    """Build table ``name`` from a mapping of column name to values (arrays or lists).
+
+    Scalars are broadcast to the length of the longest column.
+    """
+    lengths = [len(v) for v in columns.values() if hasattr(v, "__len__") and not isinstance(v, str)]
+    n = max(lengths, default=1)
+    arrays = {}
+    for fld in schema(name):
+        if fld.name not in columns:
+            raise SchemaError(f"table '{name}': no values given for column '{fld.name}'")
+        value = columns[fld.name]
+        if isinstance(value, str) or not hasattr(value, "__len__"):
+            value = [value] * n
+        arrays[fld.name] = pa.array(value, type=fld.type, from_pandas=True)
+    extra = sorted(set(columns) - set(schema(name).names))
+    if extra:
+        raise SchemaError(f"table '{name}': unexpected columns {extra}")
+    return conform(name, pa.table(arrays))
