@@ -1,0 +1,18 @@
+"""Prefect orchestration of handdb: thin flows over the library in ``handdb/``.
+
+Importing this package sets Prefect defaults that must be in place before Prefect starts
+(values already in the environment win): a start-up timeout long enough for the temporary
+local server (13-17 s on a new database, see ../shared/FACTS.md), no analytics, and a
+quiet server log.
+"""
+
+import os
+
+_PREFECT_DEFAULTS = {
+    "PREFECT_SERVER_EPHEMERAL_STARTUP_TIMEOUT_SECONDS": "90",
+    "PREFECT_SERVER_ANALYTICS_ENABLED": "false",
+    "PREFECT_SERVER_LOGGING_LEVEL": "CRITICAL",
+}
+
+for _name, _value in _PREFECT_DEFAULTS.items():
+    os.environ.setdefault(_name, _value)

@@ -1,0 +1,236 @@
+"""The build flow: inbox → database, one chain of tasks per clip.
+
+Each clip passes ingest → bone lengths → gap fill → lift → validate → export → commit,
+each stage a task that calls ``handdb.pipeline``. Clips whose build key is already in the
+database are skipped (the database is the cache). Chains are submitted in windows of a few
+clips so memory is bounded by the largest clips in flight, not by the database.
+Inputs the library refuses (bad files, no bone lengths) travel down the chain as a
+:class:`~handdb.quarantine.Refusal` and end in the ``quarantine`` table; the other clips go on.
+"""
+
+from __future__ import annotations
+
+import json
+import time
+import uuid
+from dataclasses import asdict, dataclass, field
+from datetime import UTC, datetime
+from pathlib import Path
+from typing import Any
+
+from prefect import flow, get_run_logger, task
+from prefect.artifacts import create_markdown_artifact
+from prefect.cache_policies import NO_CACHE
+from prefect.task_runners import ThreadPoolTaskRunner
+
+from handdb import __version__, pipeline, progress, tables
+from handdb.quarantine import Refusal, quarantine_table
+from handdb.readers import InboxScan, discover
+from handdb.store import Store
+
+#: Clips whose task chains run at once; bounds memory and the thread pool's queue.
+WINDOW_PER_WORKER = 2
+DEFAULT_WORKERS = 4
+
+
+def _retry_on_io(task: Any, task_run: Any, state: Any) -> bool:
+    """Retry a task only for I/O errors, never for refused input."""
+    try:
+        state.result()
+    except OSError:
+        return True
+    except Exception:  # noqa: BLE001 - any other failure is final
+        return False
+    return False
+
+
+IO_RETRIES = {"retries": 2, "retry_delay_seconds": 1, "retry_condition_fn": _retry_on_io}
+
+
+@dataclass
+class BuildSummary:
+    """What a build did, for the CLI and the ``runs`` table."""
+
+    run_id: str
+    inbox: str
+    db: str
+    n_clips: int = 0
+    processed: list[str] = field(default_factory=list)
+    unchanged: list[str] = field(default_factory=list)
+    refusals: list[Refusal] = field(default_factory=list)
+    failed: dict[str, str] = field(default_factory=dict)
+    timings: dict[str, float] = field(default_factory=dict)
+
+    @property
+    def ok(self) -> bool:
+        """Every clip went through (refused input is not a failure of the build)."""
+        return not self.failed
+
+
+@task(name="scan-inbox", cache_policy=NO_CACHE, **IO_RETRIES)
+def scan_inbox(inbox: str) -> InboxScan:
+    """Find the clips and refused entries in the inbox."""
+    return discover(Path(inbox))
+
+
+@task(name="ingest", task_run_name="ingest {clip_id}", cache_policy=NO_CACHE, **IO_RETRIES)
+def ingest(entry: Any, clip_id: str, key: str) -> pipeline.ClipResult | Refusal:
+    """Read and validate one clip's files."""
+    return pipeline.ingest(entry, key)
+
+
+@task(name="commit", task_run_name="commit {clip_id}", cache_policy=NO_CACHE, **IO_RETRIES)
+def commit(result: pipeline.ClipResult | Refusal, clip_id: str, db: str, inbox: str
+           ) -> pipeline.ClipResult | Refusal:
+    """Write the clip's tables, its ``clips`` row last."""
+    if isinstance(result, Refusal):
+        return result
+    Store(db).commit_clip(result.clip.clip_id, pipeline.clip_tables(result, Path(inbox)))
+    progress.advance(result.clip.clip_id, "commit")
+    return result
+
+
+def _run_clip_chain(entry: Any, key: str, db: str, inbox: str) -> Any:
+    clip_id = entry.clip_id
+    result = ingest.submit(entry, clip_id, key)
+    return commit.submit(result, clip_id, db, inbox)
+
+
+def task_runner(runner: str = "thread", workers: int = DEFAULT_WORKERS,
+                dask_address: str | None = None) -> Any:
+    """The task runner for per-clip tasks: a bounded thread pool, or Dask.
+
+    ``dask`` starts a local Dask cluster of ``workers`` processes unless ``dask_address``
+    names an existing scheduler.
+    """
+    if runner == "thread":
+        return ThreadPoolTaskRunner(max_workers=workers)
+    if runner == "dask":
+        from prefect_dask import DaskTaskRunner
+
+        if dask_address:
+            return DaskTaskRunner(address=dask_address)
+        return DaskTaskRunner(cluster_kwargs={"n_workers": workers, "threads_per_worker": 1,
+                                              "processes": True, "dashboard_address": None})
+    raise ValueError(f"unknown runner '{runner}': use thread or dask")
+
+
+def run(inbox: str, db: str, *, gap_fill: str | None = None, lift: str | None = None,
+        export_usd: bool = True, workers: int = DEFAULT_WORKERS, runner: str = "thread",
+        dask_address: str | None = None) -> BuildSummary:
+    """Run :func:`build` on the chosen task runner."""
+    flow_ = build.with_options(task_runner=task_runner(runner, workers, dask_address))
+    return flow_(inbox=inbox, db=db, gap_fill=gap_fill, lift=lift, export_usd=export_usd,
+                 window=workers * WINDOW_PER_WORKER)
+
+
+@flow(name="handdb-build", log_prints=False,
+      task_runner=ThreadPoolTaskRunner(max_workers=DEFAULT_WORKERS))
+def build(
+    inbox: str,
+    db: str,
+    gap_fill: str | None = None,
+    lift: str | None = None,
+    export_usd: bool = True,
+    window: int = DEFAULT_WORKERS * WINDOW_PER_WORKER,
+) -> BuildSummary:
+    """Build the database at ``db`` from the inbox folder ``inbox``.
+
+    New and changed clips are processed; unchanged clips cost a hash each. Returns a
+    :class:`BuildSummary`; a ``runs`` row records it.
+    """
+    logger = get_run_logger()
+    started = datetime.now(UTC)
+    options = pipeline.BuildOptions(gap_fill=gap_fill, lift=lift, export_usd=export_usd)
+    summary = BuildSummary(run_id=uuid.uuid4().hex[:12], inbox=inbox, db=db)
+    store = Store(db)
+    with store.lock():
+        removed = store.remove_temporaries()
+        if removed:
+            logger.warning("removed %d half-written files left by an interrupted build", removed)
+        t0 = time.perf_counter()
+        scan = scan_inbox(inbox)
+        summary.n_clips = len(scan.clips)
+        progress.expect(summary.n_clips)
+        summary.refusals.extend(Refusal.from_error(e) for e in scan.errors)
+        committed = store.clip_build_keys()
+        todo = []
+        for entry in scan.clips:
+            key = pipeline.build_key(entry.content_hash, options)
+            if committed.get(entry.clip_id) == key:
+                summary.unchanged.append(entry.clip_id)
+                progress.advance(entry.clip_id, "unchanged")
+            else:
+                todo.append((entry, key))
+        summary.timings["scan"] = time.perf_counter() - t0
+
+        t0 = time.perf_counter()
+        window = max(1, window)
+        for start in range(0, len(todo), window):
+            futures = {entry.clip_id: _run_clip_chain(entry, key, db, inbox)
+                       for entry, key in todo[start:start + window]}
+            for clip_id, future in futures.items():
+                future.wait()
+                outcome = future.result(raise_on_failure=False)
+                if isinstance(outcome, Refusal):
+                    summary.refusals.append(outcome)
+                    progress.advance(clip_id, "refused")
+                    logger.warning("clip %s refused: %s", clip_id, outcome)
+                elif isinstance(outcome, BaseException) or not future.state.is_completed():
+                    summary.failed[clip_id] = str(outcome)
+                    progress.advance(clip_id, "failed")
+                    logger.error("clip %s failed: %s", clip_id, outcome)
+                else:
+                    summary.processed.append(clip_id)
+        summary.timings["clips"] = time.perf_counter() - t0
+
+        previous = store.read_table("quarantine")
+        refused = quarantine_table(summary.refusals, inbox, previous)
+        if not refused.equals(previous):
+            store.write("quarantine", "quarantine", refused)
+        _record_run(store, summary, options, started)
+    create_markdown_artifact(markdown=summary_markdown(summary), key="handdb-build",
+                             description="handdb build summary")
+    return summary
+
+
+def summary_markdown(summary: BuildSummary) -> str:
+    """A markdown report of a build."""
+    lines = [
+        f"# handdb build {summary.run_id}",
+        "",
+        f"- inbox: `{summary.inbox}`, database: `{summary.db}`",
+        f"- clips in the inbox: {summary.n_clips}; processed {len(summary.processed)}, "
+        f"unchanged {len(summary.unchanged)}, failed {len(summary.failed)}",
+        f"- refused inputs (quarantine): {len(summary.refusals)}",
+    ]
+    if summary.refusals:
+        lines += ["", "| file | line | field | reason |", "|---|---|---|---|"]
+        lines += [f"| {r.file} | {r.line or ''} | {r.field or ''} | {r.reason} |"
+                  for r in summary.refusals]
+    if summary.failed:
+        lines += ["", "| failed clip | error |", "|---|---|"]
+        lines += [f"| {c} | {e} |" for c, e in summary.failed.items()]
+    return "\n".join(lines)
+
+
+def _record_run(store: Store, summary: BuildSummary, options: pipeline.BuildOptions,
+                started: datetime) -> None:
+    params = {"inbox": summary.inbox, "db": summary.db, **asdict(options)}
+    row = tables.from_columns("runs", {
+        "run_id": [summary.run_id],
+        "flow": ["handdb-build"],
+        "started_at": [started],
+        "finished_at": [datetime.now(UTC)],
+        "status": ["completed" if summary.ok else "failed"],
+        "parameters": [json.dumps(params, sort_keys=True)],
+        "handdb_version": [__version__],
+        "n_clips": [summary.n_clips],
+        "n_processed": [len(summary.processed)],
+        "n_unchanged": [len(summary.unchanged)],
+        "n_quarantined": [len(summary.refusals)],
+        "n_failed": [len(summary.failed)],
+        "timings": [json.dumps(summary.timings, sort_keys=True)],
+    })
+    store.write("runs", f"{started:%Y%m%dT%H%M%S}-{summary.run_id}", row)
+

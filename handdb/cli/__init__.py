@@ -1,0 +1,198 @@
+"""The ``handdb`` command line: build, query, serve, export and inspect a hand motion database.
+
+Every command that touches a database takes ``--db`` (default ``./data/db`` or
+``$HANDDB_DB``); commands that read raw input take ``--inbox`` (default ``./data/inbox`` or
+``$HANDDB_INBOX``).
+"""
+
+from __future__ import annotations
+
+import json
+import sys
+from enum import Enum
+from pathlib import Path
+
+import typer
+from rich.console import Console
+from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
+from rich.table import Table
+
+from handdb.errors import HanddbError
+from handdb.paths import DEFAULT_DB, DEFAULT_INBOX
+
+app = typer.Typer(
+    name="handdb",
+    help="Build and query a hand motion database from 2D keypoint tracks and X-ray "
+    "bone measurements.",
+    no_args_is_help=True,
+    add_completion=False,
+    pretty_exceptions_enable=False,
+)
+console = Console(stderr=True)
+out = Console()
+
+InboxOption = typer.Option(DEFAULT_INBOX, "--inbox", envvar="HANDDB_INBOX",
+                           help="Folder of raw inputs (clips, sidecars, X-ray CSVs).")
+DbOption = typer.Option(DEFAULT_DB, "--db", envvar="HANDDB_DB",
+                        help="Database folder or fsspec URL (e.g. s3://bucket/db).")
+
+#: Exit status when some inputs were quarantined but every other clip went through.
+EXIT_QUARANTINED = 3
+#: Exit status when a stage failed on a clip.
+EXIT_FAILED = 1
+
+
+class OutputFormat(str, Enum):
+    """How ``handdb sql`` prints its result."""
+
+    table = "table"
+    csv = "csv"
+    json = "json"
+
+
+class ClipProgress:
+    """A rich progress bar over the clips of a build."""
+
+    def __init__(self, progress: Progress) -> None:
+        self._progress = progress
+        self._task = progress.add_task("clips", total=None)
+
+    def expect(self, n_clips: int) -> None:
+        self._progress.update(self._task, total=n_clips)
+
+    def advance(self, clip_id: str, stage: str) -> None:
+        if stage in ("commit", "unchanged", "refused", "failed"):
+            self._progress.update(self._task, advance=1, description=f"{stage} {clip_id}")
+
+
+def run_build(inbox: str, db: str, *, gap_fill: str | None = None, lift: str | None = None,
+              export_usd: bool = True, workers: int = 4, runner: str = "thread",
+              dask_address: str | None = None, quiet: bool = False):
+    """Run the build flow with a progress bar; return its summary."""
+    from flows.build import run
+    from flows.settings import quick_flows
+    from handdb import progress as build_progress
+
+    columns = (TextColumn("[bold]{task.description}"), BarColumn(), MofNCompleteColumn(),
+               TimeElapsedColumn())
+    with Progress(*columns, console=console, transient=True, disable=quiet) as bar:
+        with build_progress.reporting(ClipProgress(bar)), quick_flows():
+            return run(inbox, db, gap_fill=gap_fill, lift=lift,
+                         export_usd=export_usd, workers=workers, runner=runner,
+                         dask_address=dask_address)
+
+
+def print_summary(summary) -> None:
+    """Print a build summary: clips, refusals, failures."""
+    console.print(
+        f"[bold]built[/] {summary.db}: {summary.n_clips} clips in the inbox, "
+        f"{len(summary.processed)} processed, {len(summary.unchanged)} unchanged, "
+        f"{len(summary.refusals)} refused, {len(summary.failed)} failed "
+        f"({sum(summary.timings.values()):.1f} s)"
+    )
+    for refusal in summary.refusals:
+        console.print(f"  [yellow]quarantined[/] {refusal}")
+    for clip_id, error in summary.failed.items():
+        console.print(f"  [red]failed[/] {clip_id}: {error}")
+
+
+@app.command()
+def build(
+    inbox: str = InboxOption,
+    db: str = DbOption,
+    gap_fill: str = typer.Option(None, help="Gap-filling method for every clip "
+                                 "(default: each clip's sidecar, else the best method)."),
+    lift: str = typer.Option(None, help="Lifting method for every clip (default: each "
+                             "clip's sidecar, else the best method)."),
+    usd: bool = typer.Option(True, help="Export every clip as USD."),
+    workers: int = typer.Option(4, min=1, help="Clips processed in parallel."),
+    runner: str = typer.Option("thread", help="Task runner: thread, or dask (a local "
+                               "cluster unless --dask-address is given)."),
+    dask_address: str = typer.Option(None, help="Address of an existing Dask scheduler."),
+) -> None:
+    """Ingest new or changed clips from the inbox and run every stage on them.
+
+    Exit status: 0 when every clip went through, 3 when some inputs were quarantined
+    (the rest was built), 1 when a stage failed on a clip.
+    """
+    try:
+        summary = run_build(inbox, db, gap_fill=gap_fill, lift=lift, export_usd=usd,
+                            workers=workers, runner=runner, dask_address=dask_address)
+    except HanddbError as exc:
+        console.print(f"[red]error:[/] {exc}")
+        raise typer.Exit(EXIT_FAILED) from None
+    print_summary(summary)
+    if summary.failed:
+        raise typer.Exit(EXIT_FAILED)
+    if summary.refusals:
+        raise typer.Exit(EXIT_QUARANTINED)
+
+
+@app.command()
+def sql(
+    statement: str = typer.Argument(..., help="SQL; every table is a view of its name."),
+    db: str = DbOption,
+    format: OutputFormat = typer.Option(OutputFormat.table, "--format", "-f",
+                                        help="table, csv (a header line, then rows) or json."),
+) -> None:
+    """Run a SQL query against the database with DuckDB and print the result."""
+    import duckdb
+
+    from handdb.query import query
+
+    try:
+        result = query(db, statement)
+    except duckdb.Error as exc:
+        console.print(f"[red]SQL error:[/] {exc}")
+        raise typer.Exit(EXIT_FAILED) from None
+    if format is OutputFormat.csv:
+        import pyarrow.csv as pacsv
+
+        pacsv.write_csv(result, sys.stdout.buffer)
+    elif format is OutputFormat.json:
+        out.print_json(json.dumps(result.to_pylist(), default=str))
+    else:
+        grid = Table(*result.column_names, show_lines=False)
+        for row in result.to_pylist():
+            grid.add_row(*("" if v is None else str(v) for v in row.values()))
+        out.print(grid)
+
+
+@app.command()
+def serve(
+    inbox: str = InboxOption,
+    db: str = DbOption,
+    cron: str = typer.Option(None, help="Cron schedule, e.g. '*/15 * * * *'."),
+    interval: float = typer.Option(None, min=1, help="Seconds between builds."),
+) -> None:
+    """Run the build on a schedule as a Prefect deployment.
+
+    Uses the Prefect server at PREFECT_API_URL; when none is set, starts a local Prefect
+    server (SQLite, loopback) for as long as this command runs.
+    """
+    if (cron is None) == (interval is None):
+        console.print("[red]error:[/] give exactly one of --cron and --interval")
+        raise typer.Exit(2)
+    from flows.serve import serve_build
+
+    serve_build(inbox=inbox, db=db, cron=cron, interval=interval)
+
+
+@app.command()
+def demo(inbox: str = InboxOption, db: str = DbOption,
+         clips: int = typer.Option(6, min=1, help="Synthetic clips to generate.")) -> None:
+    """Generate sample inputs, build the demo database and print what it holds."""
+    from handdb.demo import describe_database, write_demo_inbox
+
+    written = write_demo_inbox(Path(inbox), n_clips=clips)
+    console.print(f"wrote {len(written)} sample inputs to {inbox}")
+    summary = run_build(inbox, db)
+    print_summary(summary)
+    out.print(describe_database(db))
+    if summary.failed:
+        raise typer.Exit(EXIT_FAILED)
+
+
+def main() -> None:
+    """Entry point of the ``handdb`` command."""
+    app()
