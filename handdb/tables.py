@@ -138,7 +138,11 @@ def from_columns(name: str, columns: dict[str, Any]) -> pa.Table:
         value = columns[fld.name]
         if isinstance(value, str) or not hasattr(value, "__len__"):
             value = [value] * n
-        arrays[fld.name] = pa.array(value, type=fld.type, from_pandas=True)
+        try:
+            arrays[fld.name] = pa.array(value, type=fld.type, from_pandas=True)
+        except (pa.ArrowInvalid, pa.ArrowTypeError) as exc:
+            raise SchemaError(f"table '{name}': column '{fld.name}' cannot be "
+                              f"{fld.type}: {exc}") from None
     extra = sorted(set(columns) - set(schema(name).names))
     if extra:
         raise SchemaError(f"table '{name}': unexpected columns {extra}")

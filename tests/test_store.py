@@ -1,0 +1,154 @@
+import multiprocessing
+
+import pyarrow.parquet as pq
+import pytest
+
+from handdb import tables
+from handdb.errors import DatabaseLockedError, SchemaError, StoreError
+from handdb.query import connect, query
+from handdb.store import CLIP_TABLES, Store
+
+
+def truth_rows(clip_id, n_frames, offset=0.0):
+    frames = list(range(n_frames))
+    return tables.from_columns("truth_3d", {
+        "clip_id": clip_id, "frame": frames, "joint": ["wrist"] * n_frames,
+        "joint_index": [0] * n_frames, "x": [offset + f for f in frames],
+        "y": [0.0] * n_frames, "z": [1.0] * n_frames,
+    })
+
+
+def clip_row(clip_id, key="k1"):
+    return tables.from_columns("clips", {
+        "clip_id": [clip_id], "content_hash": ["h"], "build_key": [key],
+        "source_format": ["tracks_csv"], "source_files": [[f"{clip_id}.clip.json"]],
+        "skeleton": ["mediapipe21"], "hand": ["right"], "fps": [30.0], "subject": ["s01"],
+        "units": ["mm"], "camera_model": ["orthographic"], "fx": [None], "fy": [None],
+        "cx": [None], "cy": [None], "image_width": [None], "image_height": [None],
+        "n_frames": [3], "n_joints": [21], "n_observed": [63], "min_confidence": [0.5],
+        "gap_fill_method": [None], "lift_method": [None], "has_truth": [True],
+        "sidecar": ["{}"], "usd_path": [None], "handdb_version": ["0"],
+    })
+
+
+def test_commit_clip_writes_tables_and_marks_completion(tmp_path):
+    store = Store(str(tmp_path / "db"))
+    store.commit_clip("a", {"clips": clip_row("a"), "truth_3d": truth_rows("a", 3)})
+    assert store.clip_build_keys() == {"a": "k1"}
+    assert store.read("truth_3d", "a").num_rows == 3
+    assert pq.read_schema(store.partition_path("truth_3d", "a")).names == \
+        tables.schema("truth_3d").names
+
+
+def test_recommit_replaces_the_clip_and_drops_tables_it_no_longer_has(tmp_path):
+    store = Store(str(tmp_path / "db"))
+    store.commit_clip("a", {"clips": clip_row("a"), "truth_3d": truth_rows("a", 3)})
+    store.commit_clip("b", {"clips": clip_row("b"), "truth_3d": truth_rows("b", 2)})
+    store.commit_clip("a", {"clips": clip_row("a", "k2")})
+    assert store.read("truth_3d", "a") is None
+    assert store.read("truth_3d", "b").num_rows == 2
+    assert store.clip_build_keys() == {"a": "k2", "b": "k1"}
+
+
+def test_identical_writes_give_identical_bytes(tmp_path):
+    store = Store(str(tmp_path / "db"))
+    path = store.write("truth_3d", "a", truth_rows("a", 50))
+    first = open(path, "rb").read()
+    store.write("truth_3d", "a", truth_rows("a", 50))
+    assert open(path, "rb").read() == first
+
+
+def test_bad_rows_leave_stored_data_untouched(tmp_path):
+    store = Store(str(tmp_path / "db"))
+    store.commit_clip("a", {"clips": clip_row("a"), "truth_3d": truth_rows("a", 3)})
+    before = {p: open(p, "rb").read() for p in store.fs.glob(store.path("*", "*.parquet"))}
+    broken = truth_rows("a", 5).drop_columns(["z"])
+    with pytest.raises(SchemaError):
+        store.commit_clip("a", {"clips": clip_row("a", "k9"), "truth_3d": broken})
+    after = {p: open(p, "rb").read() for p in store.fs.glob(store.path("*", "*.parquet"))}
+    assert after == before
+    with pytest.raises(StoreError, match="no 'clips' row"):
+        store.commit_clip("a", {"truth_3d": truth_rows("a", 3)})
+
+
+def test_temporaries_are_invisible_and_cleaned(tmp_path):
+    store = Store(str(tmp_path / "db"))
+    store.write("truth_3d", "a", truth_rows("a", 3))
+    (tmp_path / "db" / "truth_3d" / "b.parquet.123.tmp").write_bytes(b"half written")
+    assert query(store, "SELECT count(*) AS n FROM truth_3d").column("n")[0].as_py() == 3
+    assert store.remove_temporaries() == 1
+    assert not list((tmp_path / "db" / "truth_3d").glob("*.tmp"))
+
+
+def _hold_lock(url, ready, release):
+    with Store(url).lock():
+        ready.set()
+        release.wait(30)
+
+
+def test_second_builder_gets_a_clear_message(tmp_path):
+    url = str(tmp_path / "db")
+    ctx = multiprocessing.get_context("spawn")
+    ready, release = ctx.Event(), ctx.Event()
+    holder = ctx.Process(target=_hold_lock, args=(url, ready, release))
+    holder.start()
+    try:
+        assert ready.wait(60)
+        with pytest.raises(DatabaseLockedError, match=r"being built by pid \d+"):
+            with Store(url).lock():
+                pass
+    finally:
+        release.set()
+        holder.join(30)
+    with Store(url).lock():  # released when the holder ended
+        pass
+
+
+def test_lock_is_released_when_the_holder_is_killed(tmp_path):
+    url = str(tmp_path / "db")
+    ctx = multiprocessing.get_context("spawn")
+    ready, release = ctx.Event(), ctx.Event()
+    holder = ctx.Process(target=_hold_lock, args=(url, ready, release))
+    holder.start()
+    assert ready.wait(60)
+    holder.kill()
+    holder.join(30)
+    with Store(url).lock():
+        pass
+
+
+def test_views_exist_for_every_table_even_when_empty(tmp_path):
+    store = Store(str(tmp_path / "db"))
+    store.commit_clip("a", {"clips": clip_row("a"), "truth_3d": truth_rows("a", 3)})
+    with connect(store) as con:
+        names = {row[0] for row in con.sql("SELECT view_name FROM duckdb_views() "
+                                           "WHERE NOT internal").fetchall()}
+        assert set(tables.table_names()) <= names
+        assert {"clip_summary", "depth_error"} <= names
+        assert con.sql("SELECT count(*) FROM joints_3d").fetchall() == [(0,)]
+        assert con.sql("SELECT sum(x) FROM truth_3d").fetchall() == [(3.0,)]
+
+
+def test_remote_filesystem_url(tmp_path):
+    store = Store("memory://handdb-test-db")
+    store.commit_clip("a", {"clips": clip_row("a"), "truth_3d": truth_rows("a", 4)})
+    assert store.clip_build_keys() == {"a": "k1"}
+    result = query(store, "SELECT count(*) AS n, max(x) AS m FROM truth_3d")
+    assert result.to_pylist() == [{"n": 4, "m": 3.0}]
+    with store.lock():
+        with pytest.raises(DatabaseLockedError, match="lock file"):
+            with Store("memory://handdb-test-db").lock():
+                pass
+    with store.lock():
+        pass
+
+
+def test_clip_tables_are_the_per_clip_contracts():
+    assert "clips" in CLIP_TABLES and "joints_3d" in CLIP_TABLES
+    assert "runs" not in CLIP_TABLES and "quarantine" not in CLIP_TABLES
+
+
+def test_store_reads_back_in_contract_order(tmp_path):
+    store = Store(str(tmp_path / "db"))
+    store.write("truth_3d", "a", truth_rows("a", 3))
+    assert store.read_table("truth_3d").schema == tables.schema("truth_3d")
