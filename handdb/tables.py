@@ -139,8 +139,8 @@ def from_columns(name: str, columns: dict[str, Any]) -> pa.Table:
         if isinstance(value, str) or not hasattr(value, "__len__"):
             value = [value] * n
         try:
-            arrays[fld.name] = pa.array(value, type=fld.type, from_pandas=True)
-        except (pa.ArrowInvalid, pa.ArrowTypeError) as exc:
+            arrays[fld.name] = pa.array(value, from_pandas=True).cast(fld.type, safe=True)
+        except (pa.ArrowInvalid, pa.ArrowTypeError, pa.ArrowNotImplementedError) as exc:
             raise SchemaError(f"table '{name}': column '{fld.name}' cannot be "
                               f"{fld.type}: {exc}") from None
     extra = sorted(set(columns) - set(schema(name).names))
