@@ -1,0 +1,74 @@
+"""Shared reading of long-form CSV files: one row per (frame, joint), named columns.
+
+Used by the canonical track format (``frame,joint,u,v[,confidence]``) and the
+ground-truth format (``frame,joint,x,y,z``).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from handdb.clip import ClipSpec
+from handdb.errors import InputError
+from handdb.readers.delimited import (
+    DelimitedTable,
+    TextLines,
+    read_bytes,
+    read_delimited,
+    split_header,
+)
+from handdb.readers.observations import resolve_joints, unknown_joint
+from handdb.skeletons import Skeleton
+
+
+def read_long_csv(path: Path, required: tuple[str, ...],
+                  optional: tuple[str, ...] = ()) -> DelimitedTable:
+    """Read a CSV whose header names ``required`` and possibly ``optional`` columns.
+
+    Raises
+    ------
+    InputError
+        For an empty file, a header that lacks a required column or names an unknown or
+        repeated one, a file without data rows, or a row with the wrong number of cells.
+    """
+    data = read_bytes(path)
+    lines = TextLines.of(data)
+    header_line = int(lines.nonblank[0])
+    header = split_header(data[lines.start[header_line - 1]:lines.end[header_line - 1]], ",")
+    accepted = ", ".join(required) + "".join(f"[, {name}]" for name in optional)
+    for name in header:
+        if name not in required + optional:
+            raise InputError(path, f"unknown column '{name}'; the header must be {accepted}",
+                             line=header_line, field=name)
+        if header.count(name) > 1:
+            raise InputError(path, "column named twice in the header", line=header_line,
+                             field=name)
+    for name in required:
+        if name not in header:
+            raise InputError(path, f"the header lacks column '{name}'; it must be {accepted}",
+                             line=header_line, field=name)
+    table = read_delimited(path, data, names=header, header_lines=1)
+    if not table.n_rows:
+        raise InputError(path, "has a header but no data rows", line=header_line)
+    return table
+
+
+def joint_column(table: DelimitedTable, column: str, spec: ClipSpec,
+                 skeleton: Skeleton) -> np.ndarray:
+    """Joint index of each row, ``(N,) int64``, from the joint names in ``column``.
+
+    Raises
+    ------
+    InputError
+        At the first row whose name is neither canonical nor mapped by ``joint_map``.
+    """
+    names, codes = table.dictionary(column)
+    indices = resolve_joints(names, spec, skeleton)
+    unknown = np.flatnonzero(indices[codes] < 0)
+    if unknown.size:
+        row = int(unknown[0])
+        raise unknown_joint(str(table.path), names[codes[row]], spec, skeleton,
+                            line=int(table.line[row]), field=column)
+    return indices[codes]
