@@ -29,6 +29,7 @@ from scipy import stats
 
 from handdb import tables
 from handdb.errors import HanddbError
+from handdb.skeletons import Skeleton
 from handdb.xray import SEGMENTS, read_xray
 
 #: Confidence level of the interval around each mean ratio.
@@ -50,6 +51,12 @@ TABLE1_RESOURCE = "chaudhry_table1.xray.csv"
 
 #: Decimals the paper prints its ratios with.
 PAPER_DECIMALS = 4
+
+#: The X-ray segment of a phalanx bone, by the roles of its parent and child joints.
+SEGMENT_OF_ROLES: dict[tuple[str, str], str] = {
+    ("mcp", "pip"): "J1", ("pip", "dip"): "J2", ("dip", "tip"): "J3",
+    ("mcp", "ip"): "J1", ("ip", "tip"): "J2",
+}
 
 
 def table1_measurements() -> pa.Table:
@@ -182,6 +189,57 @@ def finger_ratios(ratios: pa.Table, finger: str, cohort: str = ALL_COHORT) -> pa
         raise KeyError(f"joint ratios of cohort '{cohort}' lack {finger} "
                        f"{', '.join(missing)}")
     return rows.sort_by("segment")
+
+
+def phalanx_segments(skeleton: Skeleton) -> tuple[str | None, ...]:
+    """Name the X-ray segment (``J1``..``J3``) of the bone ending at each joint.
+
+    Returns
+    -------
+    tuple of str or None
+        ``(J,)``: the segment of each phalanx bone (named by its child joint), ``None``
+        for the root and for palm bones and metacarpals, which X-rays of phalanges
+        do not measure.
+    """
+    return tuple(
+        None if parent < 0 else SEGMENT_OF_ROLES.get((skeleton.roles[parent], role))
+        for parent, role in zip(skeleton.parents, skeleton.roles, strict=True)
+    )
+
+
+def bone_ratios(skeleton: Skeleton, ratios: pa.Table,
+                cohort: str = ALL_COHORT) -> tuple[np.ndarray, np.ndarray]:
+    """Mean and standard deviation of the relative length of every phalanx bone.
+
+    Parameters
+    ----------
+    skeleton
+        The skeleton whose bones to look up.
+    ratios
+        Table ``joint_ratios``.
+    cohort
+        The cohort whose statistics to use.
+
+    Returns
+    -------
+    mean, std
+        ``(J,) float64`` each, relative to the total length of the bone's finger
+        (dimensionless); NaN for bones that are not phalanges or whose finger lacks a
+        segment in ``ratios`` (``std`` also where ``n < 2``).
+    """
+    rows = ratios.filter(pc.equal(ratios.column("cohort"), cohort))
+    lookup = {(f, s): (m, sd) for f, s, m, sd in zip(
+        rows.column("finger").to_pylist(), rows.column("segment").to_pylist(),
+        rows.column("mean").to_pylist(), rows.column("std").to_pylist(), strict=True)}
+    complete = {f for f in SEGMENTS if all((f, s) in lookup for s in SEGMENTS[f])}
+    values = [
+        lookup[(finger, segment)] if segment is not None and finger in complete
+        else (None, None)
+        for finger, segment in zip(skeleton.fingers, phalanx_segments(skeleton), strict=True)
+    ]
+    mean, std = (np.array([np.nan if v is None else v for v in column], dtype=float)
+                 for column in zip(*values, strict=True))
+    return mean, std
 
 
 @dataclass(frozen=True)

@@ -29,6 +29,7 @@ import pyarrow as pa
 
 from handdb import tables
 from handdb.errors import InputError
+from handdb.readers.registry import InputFormat, register_format
 from handdb.skeletons import FINGERS
 
 #: The file name suffix the inbox recognises.
@@ -238,3 +239,8 @@ def read_xray(path: str | Path) -> tuple[pa.Table, list[InputError]]:
     errors = errors + group_errors + image_errors
     return tables.from_columns("xray_measurements", columns), sorted(
         errors, key=lambda e: (e.line or 0, e.field or ""))
+
+
+#: The inbox format of X-ray measurements; the inbox scan hands these files over by kind.
+FORMAT = register_format(InputFormat(name="xray", suffix=XRAY_SUFFIX, kind="xray",
+                                     read=read_xray))
