@@ -1,0 +1,150 @@
+"""Per-bone depth under scaled orthographic projection (thesis §3.5, eqs. 4–6).
+
+A bone of length ``l`` whose ends project ``p`` pixels apart at scale ``s`` (pixels per
+clip unit) spans a depth of ``|dZ| = sqrt(l² − (p / s)²)``. The sign of ``dZ`` is the
+reflective ambiguity (§3.6) and is left to the lifting methods. All functions are
+vectorised over frames and never modify their inputs.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from handdb.clip import Camera
+from handdb.skeletons import Skeleton
+
+
+def bone_vectors_2d(uv: np.ndarray, skeleton: Skeleton) -> np.ndarray:
+    """Image vector from each joint's parent to the joint.
+
+    Parameters
+    ----------
+    uv
+        ``(T, J, 2) float64``, pixels.
+    skeleton
+        Gives the parent of every joint.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(T, J, 2) float64``, pixels; zero at the root.
+    """
+    parents = np.where(skeleton.parents < 0, np.arange(skeleton.n_joints), skeleton.parents)
+    return uv - uv[:, parents]
+
+
+def projected_lengths(uv: np.ndarray, skeleton: Skeleton) -> np.ndarray:
+    """Image length of the bone ending at each joint, ``(T, J) float64`` pixels (root: 0)."""
+    return np.linalg.norm(bone_vectors_2d(uv, skeleton), axis=-1)
+
+
+def eq6_scale(projected: np.ndarray, bone_lengths: np.ndarray) -> np.ndarray:
+    """The thesis's scale (eq. 6): the smallest ``s`` giving every bone a real depth.
+
+    ``s >= p / l`` for every bone, so the smallest admissible scale of a frame is the
+    largest ratio of projected length to bone length. (The thesis's appendix program takes
+    the minimum ratio and then fixes ``s = 1``; handdb implements the equation.)
+
+    Parameters
+    ----------
+    projected
+        ``(T, J) float64`` image bone lengths, pixels.
+    bone_lengths
+        ``(J,) float64`` bone lengths, clip units; NaN at the root.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(T,) float64``, pixels per clip unit; NaN for frames without a finite ratio.
+    """
+    ratio = projected / bone_lengths
+    finite = np.isfinite(ratio)
+    best = np.max(np.where(finite, ratio, -np.inf), axis=1)
+    return np.where(finite.any(axis=1), best, np.nan)
+
+
+def depth_magnitudes(
+    projected: np.ndarray, bone_lengths: np.ndarray, scale: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """Unsigned depth span of every bone (eq. 5), with the discriminant clamped at zero.
+
+    Parameters
+    ----------
+    projected
+        ``(T, J) float64`` image bone lengths, pixels.
+    bone_lengths
+        ``(J,) float64``, clip units; NaN at the root.
+    scale
+        ``(T,) float64``, pixels per clip unit.
+
+    Returns
+    -------
+    abs_dz
+        ``(T, J) float64`` clip units, ``|dZ|`` of the bone ending at each joint; NaN at
+        the root. Where the track is longer than the bone (``p / s > l``) it is 0.
+    inconsistency
+        ``(T, J) float64`` clip units, ``max(0, p / s − l)``: how much longer than its
+        length the track makes the bone. (The thesis instead lengthens the bone in steps of
+        0.001 until the root is real.)
+    """
+    in_plane = projected / scale[:, None]
+    discriminant = bone_lengths**2 - in_plane**2
+    abs_dz = np.sqrt(np.clip(discriminant, 0.0, None))
+    inconsistency = np.clip(in_plane - bone_lengths, 0.0, None)
+    return abs_dz, inconsistency
+
+
+def accumulate_depths(signed_dz: np.ndarray, skeleton: Skeleton) -> np.ndarray:
+    """Walk from the root to the tips, adding each bone's signed depth to its parent's.
+
+    Parameters
+    ----------
+    signed_dz
+        ``(..., J) float64``, depth of each joint relative to its parent; ignored at the
+        root.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(..., J) float64`` depth of every joint relative to the root (root: 0).
+    """
+    z = np.zeros_like(signed_dz)
+    for joint in range(skeleton.n_joints):
+        parent = skeleton.parents[joint]
+        if parent >= 0:
+            z[..., joint] = z[..., parent] + signed_dz[..., joint]
+    return z
+
+
+def orthographic_points(uv: np.ndarray, scale: np.ndarray, z: np.ndarray) -> np.ndarray:
+    """Camera-frame points ``x = u / s, y = v / s`` with the given depth.
+
+    Parameters
+    ----------
+    uv
+        ``(T, J, 2) float64``, pixels.
+    scale
+        ``(T,) float64``, pixels per clip unit.
+    z
+        ``(T, J) float64``, clip units, relative to the root.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(T, J, 3) float64``, clip units.
+    """
+    return np.concatenate([uv / scale[:, None, None], z[..., None]], axis=-1)
+
+
+def centred_pixels(uv: np.ndarray, camera: Camera) -> np.ndarray:
+    """Image points a scaled orthographic model can use, ``(T, J, 2) float64`` pixels.
+
+    Orthographic tracks are returned unchanged. Pinhole tracks are taken about the
+    principal point and brought to one focal length (the mean of ``fx`` and ``fy``), the
+    weak-perspective view of the same camera.
+    """
+    if camera.model != "pinhole":
+        return uv
+    focal = 0.5 * (camera.fx + camera.fy)
+    centre = np.array([camera.cx, camera.cy])
+    return (uv - centre) * (focal / np.array([camera.fx, camera.fy]))

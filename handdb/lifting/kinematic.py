@@ -1,0 +1,305 @@
+"""The default lifting method, ``kinematic``: depth signs settled with what hands can do.
+
+Per frame, the unsigned depth of every bone follows from eq. 5 at a robust, smoothed scale
+(:func:`handdb.lifting.temporal.smooth_scale`). The signs are then chosen in three steps:
+
+1. **Palm.** The palm (wrist, carpometacarpal and long-finger MCP joints) is near rigid and
+   near planar: of the sign patterns of its bones, the one whose joints fit a plane best is
+   kept, with its mirror image (the palm tilted the other way) as the only alternative.
+2. **Fingers.** For each palm state, the palm's normal points to the palmar side as the
+   hand's handedness says (``(index MCP − wrist) × (little MCP − wrist)`` for a right hand,
+   the opposite for a left one), and each finger's three bones below the palm take one of
+   eight sign states. A state is scored by its flexion angles in the finger's plane (the
+   plane of the finger's metacarpal and the palm normal): each joint within its range of
+   motion, flexing toward the palm, the DIP about 2/3 of the PIP. Scores are log-likelihoods.
+3. **Time.** A sign can only change while its bone crosses the image plane, at a local
+   minimum of ``|dZ|`` over time; between two minima the evidence of every frame is pooled
+   (:mod:`handdb.lifting.temporal`). The palm's tilt is pooled the same way, its evidence
+   being the fingers' likelihood under each tilt.
+
+The confidence of each bone's sign is its pooled posterior, discounted by the probability
+that the whole clip is mirrored: flipping every sign at once changes only the
+flexion-direction evidence, so a clip without clear flexion (a flat hand) cannot settle it,
+and the result says so (``mirror_ambiguous``).
+
+With a pinhole camera the signs are found on the weak-perspective view of the clip, then
+every joint is placed on its ray at the depth its bone length allows
+(:mod:`handdb.lifting.pinhole`).
+"""
+
+from __future__ import annotations
+
+import itertools
+from typing import Any
+
+import numpy as np
+from scipy.special import logsumexp
+
+from handdb.clip import Camera
+from handdb.lifting.geometry import (
+    accumulate_depths,
+    bone_vectors_2d,
+    centred_pixels,
+    depth_magnitudes,
+    eq6_scale,
+    orthographic_points,
+    projected_lengths,
+)
+from handdb.lifting.hand_layout import CHAIN_BONES, HandLayout, hand_layout
+from handdb.lifting.pinhole import lift_perspective
+from handdb.lifting.registry import register
+from handdb.lifting.result import LiftResult
+from handdb.lifting.temporal import pooled_log_odds, run_labels, sigmoid, smooth_scale
+from handdb.skeletons import Skeleton
+
+#: Every sign pattern of a finger's three bones, ``(8, 3)``; row ``k`` has bit ``b`` of
+#: ``k`` (most significant first) set where bone ``b`` is negative.
+SIGN_STATES = np.array(list(itertools.product((1.0, -1.0), repeat=CHAIN_BONES)))
+
+#: Flexion ranges of a long finger's MCP, PIP and DIP joints, degrees (flexion positive).
+LONG_FINGER_RANGE_DEG = np.array([[-30.0, 95.0], [-5.0, 115.0], [-15.0, 95.0]])
+
+#: Flexion ranges of the thumb's three joints below the palm, degrees.
+THUMB_RANGE_DEG = np.array([[-45.0, 90.0], [-20.0, 80.0], [-30.0, 95.0]])
+
+#: Softness of a range limit: a violation by this much costs one unit of log-likelihood.
+RANGE_SOFTNESS_DEG = 10.0
+
+#: DIP flexion is about this share of PIP flexion in a natural, unloaded finger.
+DIP_PIP_RATIO = 2.0 / 3.0
+
+#: Standard deviation of the DIP flexion about ``DIP_PIP_RATIO`` times the PIP's, degrees.
+COUPLING_SIGMA_DEG = 25.0
+
+#: The clip-wide mirror counts as settled when it is this many times less likely.
+MIRROR_SETTLED_ODDS = 20.0
+
+HANDEDNESS = {"right": 1.0, "left": -1.0}
+
+
+def _unit(v: np.ndarray) -> np.ndarray:
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return v / np.linalg.norm(v, axis=-1, keepdims=True)
+
+
+def _wrap(angle: np.ndarray) -> np.ndarray:
+    return (angle + np.pi) % (2.0 * np.pi) - np.pi
+
+
+def palm_signs(xy: np.ndarray, abs_dz: np.ndarray, skeleton: Skeleton,
+               layout: HandLayout) -> np.ndarray:
+    """Sign pattern of the palm's bones that best fits a plane, per frame.
+
+    Parameters
+    ----------
+    xy
+        ``(T, J, 2) float64``, clip units, image-plane positions.
+    abs_dz
+        ``(T, J) float64``, clip units, unsigned bone depths.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(T, P) float64`` of ±1 for ``layout.palm_bones``; the mirror pattern (all signs
+        flipped) fits exactly as well and is the palm's other state. Patterns are
+        oriented so that the palm's tilt changes continuously from frame to frame
+        (:func:`continuity_signs`): a frame's state 0 continues the previous one's.
+    """
+    bones = layout.palm_bones
+    combos = np.array(list(itertools.product((1.0, -1.0), repeat=len(bones))))
+    signed = np.zeros(xy.shape[:2] + (len(combos),))
+    signed[:, bones] = (abs_dz[:, bones, None] * combos.T[None])
+    z = accumulate_depths(np.moveaxis(signed, 2, 1), skeleton)          # (T, C, J)
+    joints = np.concatenate([[skeleton.root], bones])
+    design = np.concatenate([np.nan_to_num(xy[:, joints]),
+                             np.ones((len(xy), len(joints), 1))], axis=-1)
+    plane = np.linalg.pinv(design)                                       # (T, 3, Q)
+    z_palm = np.nan_to_num(z[:, :, joints])                              # (T, C, Q)
+    coef = np.einsum("tkq,tcq->tck", plane, z_palm)
+    residual = z_palm - np.einsum("tqk,tck->tcq", design, coef)
+    best = np.argmin(np.sum(residual**2, axis=-1), axis=1)
+    tilt = np.take_along_axis(coef[..., :2], best[:, None, None], axis=1)[:, 0]
+    return combos[best] * continuity_signs(tilt)[:, None]
+
+
+def continuity_signs(tilt: np.ndarray) -> np.ndarray:
+    """Signs that make a sequence of palm tilts, each known up to its sign, continuous.
+
+    Parameters
+    ----------
+    tilt
+        ``(T, 2) float64``: the gradient of the palm plane's depth over the image plane,
+        per frame, with an arbitrary sign.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(T,) float64`` of ±1 such that consecutive signed tilts never point apart.
+    """
+    turn = np.ones(len(tilt))
+    turn[1:] = np.where(np.sum(tilt[1:] * tilt[:-1], axis=-1) < 0, -1.0, 1.0)
+    return np.cumprod(turn)
+
+
+def finger_log_likelihood(xy: np.ndarray, abs_dz: np.ndarray, palm_z: np.ndarray,
+                          skeleton: Skeleton, layout: HandLayout, hand: str) -> np.ndarray:
+    """Log-likelihood of each finger's sign states under each palm state.
+
+    Parameters
+    ----------
+    xy
+        ``(T, J, 2) float64``, clip units.
+    abs_dz
+        ``(T, J) float64``, clip units.
+    palm_z
+        ``(T, 2, J) float64``: depth of the palm joints relative to the root in palm state
+        0 and its mirror, state 1 (other joints: ignored).
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(T, 2, F, 8) float64``; 0 where a finger's bones have no image points.
+    """
+    points = np.concatenate([np.broadcast_to(xy[:, None], palm_z.shape + (2,)),
+                             palm_z[..., None]], axis=-1)                # (T, 2, J, 3)
+    wrist = points[:, :, layout.wrist]
+    normal = HANDEDNESS[hand] * _unit(np.cross(points[:, :, layout.index_mcp] - wrist,
+                                               points[:, :, layout.little_mcp] - wrist))
+    forward = points[:, :, layout.chain_bases] - wrist[:, :, None]      # (T, 2, F, 3)
+    forward = _unit(forward - np.sum(forward * normal[:, :, None], -1, keepdims=True)
+                    * normal[:, :, None])
+    bones_2d = bone_vectors_2d(xy, skeleton)[:, layout.chains]          # (T, F, 3, 2)
+    depth = abs_dz[:, layout.chains]                                     # (T, F, 3)
+
+    def component(axis: np.ndarray) -> np.ndarray:                      # (T, 2, F, 8, 3)
+        planar = np.einsum("tfbc,tmfc->tmfb", bones_2d, axis[..., :2])
+        along_z = depth[:, None] * axis[..., 2:3]
+        return planar[:, :, :, None, :] + SIGN_STATES * along_z[:, :, :, None, :]
+
+    normal_f = np.broadcast_to(normal[:, :, None], forward.shape)
+    phi = np.arctan2(component(normal_f), component(forward))
+    theta = np.concatenate([phi[..., :1], _wrap(np.diff(phi, axis=-1))], axis=-1)
+    ranges = np.radians(np.where(layout.is_thumb[:, None, None], THUMB_RANGE_DEG,
+                                 LONG_FINGER_RANGE_DEG))                 # (F, 3, 2)
+    excess = (np.clip(ranges[:, None, :, 0] - theta, 0.0, None)
+              + np.clip(theta - ranges[:, None, :, 1], 0.0, None))
+    cost = np.sum((excess / np.radians(RANGE_SOFTNESS_DEG))**2, axis=-1)
+    coupling = (theta[..., 2] - DIP_PIP_RATIO * theta[..., 1]) / np.radians(COUPLING_SIGMA_DEG)
+    cost = cost + np.where(layout.is_thumb[:, None], 0.0, coupling**2)
+    return np.nan_to_num(-0.5 * cost)
+
+
+def bone_log_odds(log_likelihood: np.ndarray) -> np.ndarray:
+    """Per-bone evidence for the positive sign, marginalised over the finger's states.
+
+    ``(..., 8)`` log-likelihoods in, ``(..., 3)`` log-odds out.
+    """
+    positive = SIGN_STATES > 0                                           # (8, 3)
+    stacked = log_likelihood[..., None]
+    with_sign = logsumexp(np.where(positive, stacked, -np.inf), axis=-2)
+    against = logsumexp(np.where(positive, -np.inf, stacked), axis=-2)
+    return with_sign - against
+
+
+def _state_index(signs: np.ndarray) -> np.ndarray:
+    weights = 2 ** np.arange(CHAIN_BONES - 1, -1, -1)
+    return np.sum((signs < 0) * weights, axis=-1)
+
+
+def resolve_signs(xy: np.ndarray, abs_dz: np.ndarray, skeleton: Skeleton,
+                  hand: str) -> tuple[np.ndarray, np.ndarray, float]:
+    """Depth sign of every bone, its confidence and the odds against the mirror.
+
+    Parameters
+    ----------
+    xy
+        ``(T, J, 2) float64``, clip units, image-plane positions.
+    abs_dz
+        ``(T, J) float64``, clip units, unsigned bone depths.
+    skeleton, hand
+        The clip's skeleton and hand.
+
+    Returns
+    -------
+    signs
+        ``(T, J) float64`` of ±1 (``+``: the child is farther from the camera); NaN at the
+        root.
+    confidence
+        ``(T, J) float64`` in [0.5, 1]; NaN at the root.
+    mirror_log_odds
+        Log-odds of the chosen signs against their clip-wide mirror (>= 0).
+    """
+    layout = hand_layout(skeleton)
+    n_frames = len(xy)
+    palm = palm_signs(xy, abs_dz, skeleton, layout)                      # (T, P)
+    palm_dz = np.zeros((n_frames, skeleton.n_joints))
+    palm_dz[:, layout.palm_bones] = palm * abs_dz[:, layout.palm_bones]
+    palm_z0 = accumulate_depths(palm_dz, skeleton)
+    palm_z = np.stack([palm_z0, -palm_z0], axis=1)
+    log_lik = finger_log_likelihood(xy, abs_dz, palm_z, skeleton, layout, hand)
+
+    evidence = logsumexp(log_lik, axis=-1).sum(axis=-1)                 # (T, 2)
+    tilt = np.sqrt(np.nanmean(abs_dz[:, layout.palm_bones] ** 2, axis=1))
+    palm_odds = pooled_log_odds(evidence[:, 0] - evidence[:, 1], run_labels(tilt))
+    state = (palm_odds < 0).astype(np.int64)
+    chosen = np.take_along_axis(log_lik, state[:, None, None, None], axis=1)[:, 0]
+
+    chain_dz = abs_dz[:, layout.chains]                                  # (T, F, 3)
+    finger_odds = pooled_log_odds(bone_log_odds(chosen), run_labels(chain_dz))
+    finger_signs = np.where(finger_odds < 0, -1.0, 1.0)
+
+    index = _state_index(finger_signs)[:, None, :, None]                # (T, 1, F, 1)
+    mirror_state = 1 - state
+    own = np.take_along_axis(chosen, index[:, 0], axis=-1)
+    mirror = np.take_along_axis(np.take_along_axis(
+        log_lik, mirror_state[:, None, None, None], axis=1)[:, 0],
+        len(SIGN_STATES) - 1 - index[:, 0], axis=-1)
+    mirror_log_odds = float(np.sum(own - mirror))
+    palm_sign = 1.0 - 2.0 * state
+    if mirror_log_odds < 0:
+        mirror_log_odds, palm_sign, finger_signs = (-mirror_log_odds, -palm_sign,
+                                                    -finger_signs)
+    p_mirror = sigmoid(-mirror_log_odds)
+
+    signs = np.full((n_frames, skeleton.n_joints), np.nan)
+    signs[:, layout.palm_bones] = palm * palm_sign[:, None]
+    signs[:, layout.chains] = finger_signs
+    confidence = np.full(signs.shape, np.nan)
+    confidence[:, layout.palm_bones] = sigmoid(np.abs(palm_odds))[:, None]
+    confidence[:, layout.chains] = sigmoid(np.abs(finger_odds))
+    confidence = confidence * (1.0 - p_mirror) + (1.0 - confidence) * p_mirror
+    return signs, np.clip(confidence, 0.5, 1.0), mirror_log_odds
+
+
+def lift_kinematic(uv: np.ndarray, skeleton: Skeleton, bone_lengths: np.ndarray,
+                   camera: Camera, *, hand: str) -> LiftResult:
+    """Lift with the hand prior; see the module docstring.
+
+    Parameters are those of :func:`handdb.lifting.lift`.
+    """
+    image = centred_pixels(uv, camera)
+    projected = projected_lengths(image, skeleton)
+    scale = smooth_scale(eq6_scale(projected, bone_lengths))
+    abs_dz, inconsistency = depth_magnitudes(projected, bone_lengths, scale)
+    xy = image / scale[:, None, None]
+    signs, confidence, mirror_log_odds = resolve_signs(xy, abs_dz, skeleton, hand)
+    ambiguous = mirror_log_odds < np.log(MIRROR_SETTLED_ODDS)
+    note = (f"clip-wide mirror not settled: the chosen depth signs are only "
+            f"{np.exp(mirror_log_odds):.3g} times as likely as all of them flipped"
+            if ambiguous else "")
+    if camera.model == "pinhole":
+        xyz, inconsistency = lift_perspective(uv, skeleton, bone_lengths, camera, signs,
+                                              scale)
+        scale = np.full(scale.shape, np.nan)
+    else:
+        xyz = orthographic_points(image, scale, accumulate_depths(signs * abs_dz, skeleton))
+    inconsistency[:, skeleton.root] = 0.0
+    return LiftResult(xyz=xyz, sign_confidence=confidence,
+                      length_inconsistency=inconsistency, scale=scale, method="kinematic",
+                      mirror_ambiguous=bool(ambiguous), note=note)
+
+
+@register("kinematic")
+def _kinematic(uv: np.ndarray, skeleton: Skeleton, bone_lengths: np.ndarray, camera: Camera,
+               *, hand: str, **params: Any) -> LiftResult:
+    return lift_kinematic(uv, skeleton, bone_lengths, camera, hand=hand, **params)

@@ -1,0 +1,133 @@
+"""Perspective lifting: joints on their camera rays, depth from the bone lengths.
+
+Through a pinhole camera a joint lies on the ray ``Z · r`` with
+``r = ((u − cx) / fx, (v − cy) / fy, 1)``. Given its parent's position ``P`` and the bone
+length ``l``, ``|Z r − P| = l`` is a quadratic in ``Z`` whose two roots are the near and far
+solutions (the reflective ambiguity, now asymmetric); the sign of each bone chooses the
+root. A negative discriminant (the ray passes farther than ``l`` from ``P``) is clamped: the
+joint goes to the ray's point nearest ``P`` and the excess distance is recorded.
+
+The root's depth is the largest for which every bone has a real solution (the perspective
+form of eq. 6), found per frame by bisection and then made robust and smooth over time like
+the orthographic scale.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from handdb.clip import Camera
+from handdb.lifting.temporal import smooth_scale
+from handdb.skeletons import Skeleton
+
+#: Bisection brackets the root depth within these factors of the weak-perspective guess.
+DEPTH_BRACKET = (0.25, 4.0)
+
+#: Bisection steps on log depth (each halves the bracket).
+BISECTION_STEPS = 30
+
+#: Relative tolerance on a bone's length below which a clamped discriminant counts as real.
+FEASIBLE_TOLERANCE = 1e-9
+
+
+def camera_rays(uv: np.ndarray, camera: Camera) -> np.ndarray:
+    """Ray direction of each image point with unit depth, ``(T, J, 3) float64``."""
+    x = (uv[..., 0] - camera.cx) / camera.fx
+    y = (uv[..., 1] - camera.cy) / camera.fy
+    return np.stack([x, y, np.ones_like(x)], axis=-1)
+
+
+def walk_rays(rays: np.ndarray, root_depth: np.ndarray, skeleton: Skeleton,
+              bone_lengths: np.ndarray, signs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Place every joint on its ray, from the root to the tips.
+
+    Parameters
+    ----------
+    rays
+        ``(T, J, 3) float64`` from :func:`camera_rays`.
+    root_depth
+        ``(T,) float64``, clip units: depth ``Z`` of the root.
+    bone_lengths
+        ``(J,) float64``, clip units.
+    signs
+        ``(T, J) float64``: +1 takes the far root of each bone's quadratic, -1 the near one.
+
+    Returns
+    -------
+    xyz
+        ``(T, J, 3) float64``, clip units, camera frame.
+    inconsistency
+        ``(T, J) float64`` >= 0, clip units: how much farther than its bone length the ray
+        passes from the parent (0 at the root).
+    """
+    xyz = np.empty(rays.shape)
+    inconsistency = np.zeros(rays.shape[:2])
+    xyz[:, skeleton.root] = rays[:, skeleton.root] * root_depth[:, None]
+    for joint in range(skeleton.n_joints):
+        parent = skeleton.parents[joint]
+        if parent < 0:
+            continue
+        ray, origin = rays[:, joint], xyz[:, parent]
+        a = np.sum(ray * ray, axis=-1)
+        b = np.sum(ray * origin, axis=-1)
+        nearest = b / a
+        miss_sq = np.clip(np.sum(origin * origin, axis=-1) - b * nearest, 0.0, None)
+        length = bone_lengths[joint]
+        half_chord = np.sqrt(np.clip(length**2 - miss_sq, 0.0, None) / a)
+        xyz[:, joint] = ray * (nearest + signs[:, joint] * half_chord)[:, None]
+        inconsistency[:, joint] = np.clip(np.sqrt(miss_sq) - length, 0.0, None)
+    return xyz, inconsistency
+
+
+def deepest_feasible_root(rays: np.ndarray, guess: np.ndarray, skeleton: Skeleton,
+                          bone_lengths: np.ndarray, signs: np.ndarray) -> np.ndarray:
+    """Largest root depth per frame at which every bone has a real solution.
+
+    Parameters
+    ----------
+    guess
+        ``(T,) float64``, clip units: a first guess (weak perspective); the answer is
+        searched within :data:`DEPTH_BRACKET` of it.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(T,) float64``, clip units.
+    """
+    low = np.log(guess * DEPTH_BRACKET[0])
+    high = np.log(guess * DEPTH_BRACKET[1])
+    tolerance = FEASIBLE_TOLERANCE * np.nanmax(bone_lengths)
+    for _ in range(BISECTION_STEPS):
+        middle = 0.5 * (low + high)
+        _, excess = walk_rays(rays, np.exp(middle), skeleton, bone_lengths, signs)
+        feasible = np.nanmax(excess, axis=1) <= tolerance
+        low = np.where(feasible, middle, low)
+        high = np.where(feasible, high, middle)
+    return np.exp(low)
+
+
+def lift_perspective(uv: np.ndarray, skeleton: Skeleton, bone_lengths: np.ndarray,
+                     camera: Camera, signs: np.ndarray,
+                     weak_scale: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Lift a pinhole clip whose bone signs are known.
+
+    Parameters
+    ----------
+    uv
+        ``(T, J, 2) float64``, pixels.
+    signs
+        ``(T, J) float64`` of ±1 (+: the child is farther from the camera).
+    weak_scale
+        ``(T,) float64``, pixels per clip unit, of the weak-perspective view: the root's
+        depth is first guessed as ``focal / weak_scale``.
+
+    Returns
+    -------
+    xyz, inconsistency
+        As :func:`walk_rays`.
+    """
+    rays = camera_rays(uv, camera)
+    focal = 0.5 * (camera.fx + camera.fy)
+    bound = deepest_feasible_root(rays, focal / weak_scale, skeleton, bone_lengths, signs)
+    root_depth = 1.0 / smooth_scale(1.0 / bound)
+    return walk_rays(rays, root_depth, skeleton, bone_lengths, signs)

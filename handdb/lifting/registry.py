@@ -1,0 +1,132 @@
+"""The lifting methods by name, and :func:`lift`, the one entry point."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import Any, Protocol
+
+import numpy as np
+
+from handdb.clip import HANDS, Camera
+from handdb.lifting.result import LiftResult
+from handdb.skeletons import Skeleton
+
+#: Method used when a clip's sidecar names none.
+DEFAULT_METHOD = "kinematic"
+
+
+class LiftMethod(Protocol):
+    """Signature every lifting method implements (see :func:`lift`)."""
+
+    def __call__(self, uv: np.ndarray, skeleton: Skeleton, bone_lengths: np.ndarray,
+                 camera: Camera, *, hand: str, **params: Any) -> LiftResult: ...
+
+
+_METHODS: dict[str, LiftMethod] = {}
+
+
+def register(name: str) -> Callable[[LiftMethod], LiftMethod]:
+    """Class the decorated function as the lifting method ``name``."""
+
+    def decorate(method: LiftMethod) -> LiftMethod:
+        if name in _METHODS:
+            raise ValueError(f"lifting method '{name}' is registered twice")
+        _METHODS[name] = method
+        return method
+
+    return decorate
+
+
+def available_methods() -> tuple[str, ...]:
+    """Names of the registered lifting methods."""
+    return tuple(sorted(_METHODS))
+
+
+def bone_length_array(skeleton: Skeleton, lengths: dict[str, float]) -> np.ndarray:
+    """Bone lengths as ``(J,) float64`` (length of the bone ending at each joint).
+
+    Parameters
+    ----------
+    skeleton
+        Orders the result.
+    lengths
+        ``{child joint: length}``, clip units (a sidecar's ``bone_lengths``).
+
+    Returns
+    -------
+    numpy.ndarray
+        NaN at the root and for bones ``lengths`` lacks.
+    """
+    out = np.full(skeleton.n_joints, np.nan)
+    for name, length in lengths.items():
+        out[skeleton.index(name)] = length
+    out[skeleton.root] = np.nan
+    return out
+
+
+def _check_inputs(uv: np.ndarray, skeleton: Skeleton, bone_lengths: np.ndarray,
+                  hand: str) -> None:
+    n_joints = skeleton.n_joints
+    if uv.ndim != 3 or uv.shape[1:] != (n_joints, 2):
+        raise ValueError(f"uv must be (T, {n_joints}, 2) for skeleton '{skeleton.name}', "
+                         f"got {uv.shape}")
+    if bone_lengths.shape != (n_joints,):
+        raise ValueError(f"bone_lengths must be ({n_joints},), got {bone_lengths.shape}")
+    bones = skeleton.bones[:, 1]
+    bad = [skeleton.joints[j] for j in bones
+           if not (np.isfinite(bone_lengths[j]) and bone_lengths[j] > 0)]
+    if bad:
+        raise ValueError(f"bone lengths must be positive and finite; missing or invalid for "
+                         f"{', '.join(bad)}")
+    if hand not in HANDS:
+        raise ValueError(f"hand must be one of {', '.join(HANDS)}, got {hand!r}")
+
+
+def lift(
+    uv: np.ndarray,
+    skeleton: Skeleton,
+    bone_lengths: np.ndarray,
+    camera: Camera,
+    *,
+    method: str = DEFAULT_METHOD,
+    hand: str = "right",
+    **params: Any,
+) -> LiftResult:
+    """Give every joint of every frame its depth.
+
+    Parameters
+    ----------
+    uv
+        ``(T, J, 2) float64``, pixels (x right, y down); NaN where a point is missing.
+    skeleton
+        The clip's skeleton; ``uv``'s joint axis follows its order.
+    bone_lengths
+        ``(J,) float64``, clip units: length of the bone ending at each joint, NaN for the
+        root (see :func:`bone_length_array`).
+    camera
+        ``orthographic`` (scale unknown) or ``pinhole`` (intrinsics in pixels).
+    method
+        A name from :func:`available_methods`.
+    hand
+        ``"right"`` or ``"left"``: which hand the clip shows.
+    **params
+        Parameters of the method.
+
+    Returns
+    -------
+    LiftResult
+        Positions in clip units, camera frame, with per-bone sign confidence and length
+        inconsistency.
+
+    Raises
+    ------
+    ValueError
+        On an unknown method, arrays of the wrong shape, or missing bone lengths.
+    """
+    if method not in _METHODS:
+        raise ValueError(f"unknown lifting method '{method}'; known: "
+                         f"{', '.join(available_methods())}")
+    uv = np.asarray(uv, dtype=np.float64)
+    bone_lengths = np.asarray(bone_lengths, dtype=np.float64)
+    _check_inputs(uv, skeleton, bone_lengths, hand)
+    return _METHODS[method](uv, skeleton, bone_lengths, camera, hand=hand, **params)
