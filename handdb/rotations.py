@@ -57,6 +57,10 @@ REST_FINGER_ANGLES: dict[str, float] = {
 }
 REST_PALM_ROLE_ANGLES: dict[str, float] = {"wrist": 180.0, "palm_center": 0.0}
 
+#: From handdb's camera frame (x right, y down, z away from the camera) to a Y-up,
+#: right-handed frame (x right, y up, z towards the camera): 180 degrees about x.
+CAMERA_TO_Y_UP = Rotation.from_rotvec([np.pi, 0.0, 0.0])
+
 _EPS = 1e-12
 
 
@@ -358,3 +362,18 @@ def rest_positions(skeleton: Skeleton, bone_lengths: np.ndarray) -> np.ndarray:
 def rest_pose(skeleton: Skeleton, bone_lengths: np.ndarray) -> JointMotion:
     """Local transforms of the rest pose (:func:`rest_positions`), one frame (``T = 1``)."""
     return joint_rotations(rest_positions(skeleton, bone_lengths)[None], skeleton, bone_lengths)
+
+
+def turn_root(motion: JointMotion, skeleton: Skeleton, rotation: Rotation) -> JointMotion:
+    """``motion`` seen in a frame turned by ``rotation`` (e.g. :data:`CAMERA_TO_Y_UP`).
+
+    Only the root's rotation and translation change: every other local transform is
+    relative to its parent and stays as it is.
+    """
+    root = skeleton.root
+    rotations = motion.rotations.copy()
+    translations = motion.translations.copy()
+    root_rotation = Rotation.from_quat(rotations[:, root], scalar_first=True)
+    rotations[:, root] = (rotation * root_rotation).as_quat(scalar_first=True)
+    translations[:, root] = rotation.apply(translations[:, root])
+    return JointMotion(rotations=_continuous_sign(rotations), translations=translations)

@@ -10,7 +10,7 @@ Layout of the exported stage (``<Hand>`` is ``RightHand`` or ``LeftHand``)::
 
 Axes. handdb's 3D frame is the camera's: ``x`` right, ``y`` down, ``z`` away from the
 camera. The stage is Y-up and right-handed, and is handdb's frame turned 180 degrees
-about ``x`` (:data:`CAMERA_TO_USD`): ``(x, y, z) -> (x, -y, -z)``, so USD's ``+Y`` is up in
+about ``x`` (:data:`handdb.rotations.CAMERA_TO_Y_UP`): ``(x, y, z) -> (x, -y, -z)``, so USD's ``+Y`` is up in
 the image and ``+Z`` points towards the camera, and a USD camera at ``+Z`` looking down
 ``-Z`` sees what the source camera saw. The turn is applied to the root joint only;
 every other joint's local transform is unchanged.
@@ -36,11 +36,15 @@ from scipy.spatial.transform import Rotation
 from handdb.clip import HANDS, METERS_PER_UNIT
 from handdb.errors import StageError
 from handdb.mesh import INFLUENCES, hand_mesh
-from handdb.rotations import JointMotion, joint_rotations, rest_pose, world_transforms
+from handdb.rotations import (
+    CAMERA_TO_Y_UP,
+    JointMotion,
+    joint_rotations,
+    rest_pose,
+    turn_root,
+    world_transforms,
+)
 from handdb.skeletons import Skeleton
-
-#: Rotation from handdb's camera frame (x right, y down, z away) to the Y-up stage.
-CAMERA_TO_USD = Rotation.from_rotvec([np.pi, 0.0, 0.0])
 
 #: File suffixes written as a plain layer (``.usd`` is written as binary crate).
 LAYER_SUFFIXES = (".usd", ".usdc", ".usda")
@@ -62,17 +66,6 @@ def _usd_matrices(orientations: np.ndarray, positions: np.ndarray) -> Vt.Matrix4
     matrices[:, 3, :3] = positions
     matrices[:, 3, 3] = 1.0
     return Vt.Matrix4dArray.FromNumpy(matrices)
-
-
-def _to_stage_axes(motion: JointMotion, skeleton: Skeleton) -> JointMotion:
-    """``motion`` with the root turned and moved by :data:`CAMERA_TO_USD`."""
-    root = skeleton.root
-    rotations = motion.rotations.copy()
-    translations = motion.translations.copy()
-    root_rotation = Rotation.from_quat(rotations[:, root], scalar_first=True)
-    rotations[:, root] = (CAMERA_TO_USD * root_rotation).as_quat(scalar_first=True)
-    translations[:, root] = CAMERA_TO_USD.apply(translations[:, root])
-    return JointMotion(rotations=rotations, translations=translations)
 
 
 def _set_stage_metadata(stage: Usd.Stage, n_frames: int, fps: float, units: str) -> None:
@@ -176,7 +169,7 @@ def build_clip_stage(
 
     anim = UsdSkel.Animation.Define(stage, root.GetPath().AppendChild("Animation"))
     anim.CreateJointsAttr(joints)
-    _author_animation(anim, _to_stage_axes(motion, skeleton))
+    _author_animation(anim, turn_root(motion, skeleton, CAMERA_TO_Y_UP))
     UsdSkel.BindingAPI.Apply(skel.GetPrim()).CreateAnimationSourceRel().SetTargets(
         [anim.GetPath()])
 

@@ -5,9 +5,9 @@ from pxr import Usd, UsdGeom, UsdSkel
 from handdb.clip import METERS_PER_UNIT
 from handdb.errors import StageError
 from handdb.mesh import hand_mesh, posed_vertices
-from handdb.rotations import rest_pose, rest_positions
+from handdb.rotations import CAMERA_TO_Y_UP, rest_pose, rest_positions
 from handdb.skeletons import load_skeleton
-from handdb.usd_export import CAMERA_TO_USD, export_clip_usd, joint_paths
+from handdb.usd_export import export_clip_usd, joint_paths
 
 from .conftest import make_hinge_motion
 from .usd_reading import joint_world_positions, open_skeleton, validation_errors
@@ -28,7 +28,7 @@ def test_usdskel_reproduces_the_joints_at_every_frame(hinge_motion, tmp_path, su
     assert path.read_bytes().startswith(MAGIC[suffix])
     clip = open_skeleton(path)
     stage_xyz = joint_world_positions(clip.skel_query, len(hinge_motion.xyz))
-    camera_xyz = CAMERA_TO_USD.inv().apply(stage_xyz.reshape(-1, 3)).reshape(stage_xyz.shape)
+    camera_xyz = CAMERA_TO_Y_UP.inv().apply(stage_xyz.reshape(-1, 3)).reshape(stage_xyz.shape)
     tolerance = 1e-4 * hinge_motion.bone_lengths[hinge_motion.bone_lengths > 0].min()
     assert np.abs(camera_xyz - hinge_motion.xyz).max() < tolerance
 
@@ -87,7 +87,7 @@ def test_mesh_skinning_matches_the_posed_hand(mediapipe_motion, tmp_path):
     assert skinning_query.ComputeSkinnedPoints(skinning, points, frame)
     expected = posed_vertices(hand_mesh(skeleton, lengths), mediapipe_motion.xyz[[frame]],
                               skeleton, lengths)[0]
-    np.testing.assert_allclose(np.array(points), CAMERA_TO_USD.apply(expected), atol=1e-3)
+    np.testing.assert_allclose(np.array(points), CAMERA_TO_Y_UP.apply(expected), atol=1e-3)
 
 
 def test_given_rotations_are_exported(mediapipe_motion, tmp_path):
@@ -96,7 +96,7 @@ def test_given_rotations_are_exported(mediapipe_motion, tmp_path):
     path = export(mediapipe_motion, tmp_path / "c.usdc", xyz=mediapipe_motion.xyz[:1], rotations=still)
     clip = open_skeleton(path)
     np.testing.assert_allclose(joint_world_positions(clip.skel_query, 1)[0],
-                               CAMERA_TO_USD.apply(rest_positions(skeleton, lengths)), atol=1e-4)
+                               CAMERA_TO_Y_UP.apply(rest_positions(skeleton, lengths)), atol=1e-4)
 
 
 def test_left_hand_and_reexport_over_an_existing_file(tmp_path):
