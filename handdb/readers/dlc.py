@@ -127,7 +127,8 @@ def read(path: str | Path, spec: ClipSpec, skeleton: Skeleton) -> Observations:
     names = ["frame"] + [f"{bodypart}.{coord}" for bodypart, coord in columns]
     table = read_delimited(path, data, names=names, header_lines=len(header))
     if not table.n_rows:
-        raise InputError(path, "has header rows but no data rows", line=bodyparts_line)
+        raise InputError(path, "has header rows but no data rows",
+                         line=header["coords"][0])
     frame = table.frames("frame")
 
     def wide(coord: str) -> np.ndarray:

@@ -111,7 +111,7 @@ class _Rows:
             pick = np.argmin(np.maximum(first, second))
             row, again = int(first[pick]), int(second[pick])
             raise self.error(
-                again, "joint",
+                again, "frame",
                 f"frame {self.frame[row]} joint '{self.skeleton.joints[self.joint[row]]}' "
                 f"is given twice, here and at {self.where(row)}; keep one of them")
 

@@ -1,0 +1,122 @@
+import json
+
+import numpy as np
+import pytest
+
+from handdb.errors import InputError
+from handdb.readers import openpose
+
+
+def keypoint_file(folder, frame, people, name="clip"):
+    folder.mkdir(exist_ok=True)
+    path = folder / f"{name}_{frame:012d}_keypoints.json"
+    path.write_text(json.dumps({"version": 1.3, "people": people}))
+    return path
+
+
+def hand(points, side="right"):
+    return {"pose_keypoints_2d": [], f"hand_{side}_keypoints_2d": points}
+
+
+def test_round_trip_marks_zero_points_missing(tmp_path, spec_for, mediapipe21, noisy_track):
+    uv, confidence = noisy_track
+    folder = tmp_path / "clip.openpose"
+    openpose.write(folder, uv, confidence, mediapipe21, hand="right")
+    obs = openpose.read(folder, spec_for(tmp_path), mediapipe21)
+    present = np.isfinite(uv).all(axis=-1)
+    assert obs.n_frames == uv.shape[0]
+    assert 3 not in obs.frame, "a frame without points is written and read with no people"
+    reported = present[obs.frame, obs.joint]
+    np.testing.assert_array_equal(obs.uv[reported], uv[obs.frame, obs.joint][reported])
+    assert np.isnan(obs.uv[~reported]).all()
+    np.testing.assert_array_equal(obs.confidence[~reported], 0.0)
+    np.testing.assert_array_equal(obs.confidence[reported],
+                                  confidence[obs.frame, obs.joint][reported])
+
+
+def test_frames_come_from_file_names_and_the_sidecar_picks_the_hand(tmp_path, spec_for,
+                                                                    mediapipe21):
+    folder = tmp_path / "clip.openpose"
+    right = [0.0] * 63
+    left = [5.0, 6.0, 0.75] + [0.0] * 60
+    keypoint_file(folder, 10, [hand(right) | hand(left, "left")])
+    keypoint_file(folder, 9, [hand(right) | hand(left, "left")])
+    keypoint_file(folder, 11, [])
+    (folder / "notes.txt").write_text("ignored")
+    obs = openpose.read(folder, spec_for(tmp_path, hand="left"), mediapipe21)
+    assert obs.n_frames == 12
+    assert sorted(set(obs.frame.tolist())) == [9, 10]
+    wrist = obs.uv[(obs.joint == 0)]
+    np.testing.assert_array_equal(wrist, [[5.0, 6.0], [5.0, 6.0]])
+    assert obs.files[obs.source[0]].endswith("clip_000000000009_keypoints.json")
+
+
+def test_thesis_skeleton_drops_the_joint_it_lacks(tmp_path, spec_for, mediapipe21, thesis21,
+                                                  noisy_track):
+    uv, confidence = noisy_track
+    folder = tmp_path / "clip.openpose"
+    openpose.write(folder, uv, confidence, mediapipe21, hand="right")
+    obs = openpose.read(folder, spec_for(tmp_path, skeleton="thesis21"), thesis21)
+    assert thesis21.index("palm_fold") not in obs.joint
+    assert len(set(obs.joint.tolist())) == 20
+
+
+@pytest.mark.parametrize(("people", "field", "message"), [
+    ([hand([1.0] * 60)], "people[0].hand_right_keypoints_2d", "has 60 numbers.*63"),
+    ([hand("abc")], "people[0].hand_right_keypoints_2d", "has 0 numbers"),
+    ([hand([1.0] * 62 + ["x"])], "people[0].hand_right_keypoints_2d", "list of numbers"),
+    ([hand([1.0] * 63, "left")], "people[0].hand_right_keypoints_2d", "no right hand"),
+    ([hand([float("nan")] + [1.0] * 62)], "people[0].hand_right_keypoints_2d", "NaN"),
+])
+def test_bad_keypoint_arrays_name_the_frame_file(tmp_path, spec_for, mediapipe21, people, field,
+                                                  message):
+    folder = tmp_path / "clip.openpose"
+    keypoint_file(folder, 0, [hand([1.0, 2.0, 0.9] * 21)])
+    bad = keypoint_file(folder, 1, people)
+    with pytest.raises(InputError, match=message) as info:
+        openpose.read(folder, spec_for(tmp_path), mediapipe21)
+    assert (info.value.file, info.value.field) == (str(bad), field)
+
+
+def test_confidence_outside_unit_range_names_the_keypoint(tmp_path, spec_for, mediapipe21):
+    folder = tmp_path / "clip.openpose"
+    bad = keypoint_file(folder, 0, [hand([1.0, 2.0, 0.9] * 20 + [1.0, 2.0, 7.0])])
+    with pytest.raises(InputError, match="confidence 7.0 lies outside") as info:
+        openpose.read(folder, spec_for(tmp_path), mediapipe21)
+    assert info.value.file == str(bad)
+    assert info.value.field == "people[0].hand_right_keypoints_2d[little_tip].c"
+
+
+def test_truncated_json_names_file_and_line(tmp_path, spec_for, mediapipe21):
+    folder = tmp_path / "clip.openpose"
+    good = keypoint_file(folder, 0, [hand([1.0, 2.0, 0.9] * 21)])
+    cut = folder / "clip_000000000001_keypoints.json"
+    cut.write_text(json.dumps({"people": [hand([1.0] * 63)]}, indent=1)[:150])
+    with pytest.raises(InputError, match="not valid JSON.*truncated") as info:
+        openpose.read(folder, spec_for(tmp_path), mediapipe21)
+    assert info.value.file == str(cut) and info.value.line > 1
+    assert good.exists()
+
+
+@pytest.mark.parametrize(("content", "message"), [
+    ("", "is empty"),
+    ("[1, 2]", "needs a 'people' list"),
+])
+def test_files_that_are_not_openpose_output(tmp_path, spec_for, mediapipe21, content, message):
+    folder = tmp_path / "clip.openpose"
+    folder.mkdir()
+    (folder / "clip_000000000000_keypoints.json").write_text(content)
+    with pytest.raises(InputError, match=message):
+        openpose.read(folder, spec_for(tmp_path), mediapipe21)
+
+
+def test_empty_folder_and_repeated_frame_numbers(tmp_path, spec_for, mediapipe21):
+    folder = tmp_path / "clip.openpose"
+    folder.mkdir()
+    with pytest.raises(InputError, match="holds no"):
+        openpose.read(folder, spec_for(tmp_path), mediapipe21)
+    keypoint_file(folder, 4, [], name="a")
+    keypoint_file(folder, 4, [], name="b")
+    with pytest.raises(InputError, match="frame 4 is also in a_000000000004") as info:
+        openpose.read(folder, spec_for(tmp_path), mediapipe21)
+    assert info.value.file.endswith("b_000000000004_keypoints.json")
