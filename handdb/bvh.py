@@ -89,7 +89,7 @@ def _hierarchy(skeleton: Skeleton, offsets: np.ndarray, bone_lengths: np.ndarray
 
 
 def motion_channels(motion: JointMotion, skeleton: Skeleton) -> np.ndarray:
-    """The MOTION block's numbers: one row per frame, joints in :func:`depth_first_order`.
+    """Return the MOTION block's numbers: a row per frame, joints in :func:`depth_first_order`.
 
     Parameters
     ----------

@@ -63,7 +63,7 @@ class HandMesh:
     face_joints: np.ndarray
 
     def to_trimesh(self, vertices: np.ndarray | None = None) -> trimesh.Trimesh:
-        """The mesh (or the same faces on posed ``vertices``) with ``face_attributes['joint']``."""
+        """Return the mesh (or its faces on ``vertices``) with ``face_attributes['joint']``."""
         return trimesh.Trimesh(
             vertices=self.vertices if vertices is None else vertices,
             faces=self.faces,
@@ -87,7 +87,7 @@ def _finger_radii(skeleton: Skeleton, bone_lengths: np.ndarray, bones: np.ndarra
 
 
 def _capsule(start: np.ndarray, end: np.ndarray, radius: float) -> trimesh.Trimesh:
-    """A capsule whose sphere centres are ``start`` and ``end``."""
+    """Return a capsule whose sphere centres are ``start`` and ``end``."""
     axis = end - start
     length = float(np.linalg.norm(axis))
     transform = trimesh.geometry.align_vectors([0.0, 0.0, 1.0], axis / length)
@@ -140,7 +140,8 @@ def hand_mesh(skeleton: Skeleton, bone_lengths: np.ndarray) -> HandMesh:
     offsets = np.cumsum([0] + [len(p.vertices) for p in parts[:-1]])
     return HandMesh(
         vertices=np.concatenate([p.vertices for p in parts]),
-        faces=np.concatenate([p.faces + o for p, o in zip(parts, offsets)]).astype(np.int64),
+        faces=np.concatenate(
+            [p.faces + o for p, o in zip(parts, offsets, strict=True)]).astype(np.int64),
         joint_indices=np.concatenate(indices).astype(np.int64),
         joint_weights=np.concatenate(weights),
         face_joints=np.concatenate(face_joints).astype(np.int64),
@@ -185,7 +186,7 @@ def posed_hand_mesh(
     bone_lengths: np.ndarray,
     mesh: HandMesh | None = None,
 ) -> trimesh.Trimesh:
-    """The hand mesh posed at one frame, e.g. for occlusion ray casts (``trimesh.ray``).
+    """Pose the hand mesh at one frame, e.g. for occlusion ray casts (``trimesh.ray``).
 
     Parameters
     ----------

@@ -179,7 +179,9 @@ def palm_frame(xyz: np.ndarray, skeleton: Skeleton) -> np.ndarray:
     return _frame_from_axes(lateral, y, np.cross(y, [0.0, 0.0, 1.0]))
 
 
-def _finger_hinge_axes(xyz: np.ndarray, skeleton: Skeleton, palm: np.ndarray) -> dict[str, np.ndarray]:
+def _finger_hinge_axes(
+    xyz: np.ndarray, skeleton: Skeleton, palm: np.ndarray
+) -> dict[str, np.ndarray]:
     """Hinge axis of every finger, ``finger -> (T, 3)`` unit vectors (see module doc)."""
     palm_normal = palm[..., 2]
     axes = {}
@@ -270,7 +272,8 @@ def joint_rotations(xyz: np.ndarray, skeleton: Skeleton, bone_lengths: np.ndarra
     root = skeleton.root
     local = frames.copy()
     has_parent = parents >= 0
-    local[:, has_parent] = np.swapaxes(frames[:, parents[has_parent]], -1, -2) @ frames[:, has_parent]
+    parent_frames = frames[:, parents[has_parent]]
+    local[:, has_parent] = np.swapaxes(parent_frames, -1, -2) @ frames[:, has_parent]
 
     translations = np.zeros(xyz.shape)
     translations[:, root] = xyz[:, root]
@@ -350,7 +353,8 @@ def rest_positions(skeleton: Skeleton, bone_lengths: np.ndarray) -> np.ndarray:
     for parent, child in skeleton.bones:
         if parent == skeleton.root:
             finger, role = skeleton.fingers[child], skeleton.roles[child]
-            angle = np.deg2rad(REST_FINGER_ANGLES.get(finger, REST_PALM_ROLE_ANGLES.get(role, 0.0)))
+            degrees = REST_FINGER_ANGLES.get(finger, REST_PALM_ROLE_ANGLES.get(role, 0.0))
+            angle = np.deg2rad(degrees)
             directions[child] = [np.sin(angle), np.cos(angle), 0.0]
         else:
             directions[child] = directions[parent]

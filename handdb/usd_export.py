@@ -10,10 +10,10 @@ Layout of the exported stage (``<Hand>`` is ``RightHand`` or ``LeftHand``)::
 
 Axes. handdb's 3D frame is the camera's: ``x`` right, ``y`` down, ``z`` away from the
 camera. The stage is Y-up and right-handed, and is handdb's frame turned 180 degrees
-about ``x`` (:data:`handdb.rotations.CAMERA_TO_Y_UP`): ``(x, y, z) -> (x, -y, -z)``, so USD's ``+Y`` is up in
-the image and ``+Z`` points towards the camera, and a USD camera at ``+Z`` looking down
-``-Z`` sees what the source camera saw. The turn is applied to the root joint only;
-every other joint's local transform is unchanged.
+about ``x`` (:data:`handdb.rotations.CAMERA_TO_Y_UP`): ``(x, y, z) -> (x, -y, -z)``, so
+USD's ``+Y`` is up in the image and ``+Z`` points towards the camera: a USD camera on ``+Z``
+looking down ``-Z`` sees what the source camera saw. The turn is applied to the root
+joint only; every other joint's local transform is unchanged.
 
 Lengths stay in the clip's units and ``metersPerUnit`` says which. Frame ``i`` is at time
 code ``i``; ``timeCodesPerSecond`` and ``framesPerSecond`` are the clip's fps.
@@ -54,7 +54,7 @@ USDZ_SUFFIX = ".usdz"
 def joint_paths(skeleton: Skeleton) -> list[str]:
     """UsdSkel joint paths (``wrist/index_mcp/index_pip``), parents before children."""
     paths: list[str] = []
-    for joint, parent in zip(skeleton.joints, skeleton.parents):
+    for joint, parent in zip(skeleton.joints, skeleton.parents, strict=True):
         paths.append(joint if parent < 0 else f"{paths[parent]}/{joint}")
     return paths
 
@@ -78,7 +78,7 @@ def _set_stage_metadata(stage: Usd.Stage, n_frames: int, fps: float, units: str)
 
 
 def _author_animation(anim: UsdSkel.Animation, motion: JointMotion) -> None:
-    """Author every channel of ``anim`` at every frame (a missing one reverts to rest)."""
+    """Set every channel of ``anim`` at every frame (a missing one falls back to rest)."""
     n_frames, n_joints = motion.rotations.shape[:2]
     xyzw = np.ascontiguousarray(np.roll(motion.rotations, -1, axis=-1), dtype=np.float32)
     translations = np.ascontiguousarray(motion.translations, dtype=np.float32)
@@ -255,7 +255,8 @@ def export_clip_usd(
     if xyz.ndim != 3 or xyz.shape[1:] != (skeleton.n_joints, 3) or len(xyz) == 0:
         raise ValueError(f"xyz must be (T, {skeleton.n_joints}, 3) with T > 0, got {xyz.shape}")
     if np.shape(bone_lengths) != (skeleton.n_joints,):
-        raise ValueError(f"bone_lengths must be ({skeleton.n_joints},), got {np.shape(bone_lengths)}")
+        raise ValueError(
+            f"bone_lengths must be ({skeleton.n_joints},), got {np.shape(bone_lengths)}")
     if rotations is None:
         missing = ~np.isfinite(xyz).all(axis=(1, 2))
         if missing.any():

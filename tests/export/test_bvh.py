@@ -54,7 +54,7 @@ def bvh_positions(joints, values):
         translation = np.tile(joint["offset"], (n_frames, 1))
         rotation = Rotation.identity(n_frames)
         if channels:
-            named = dict(zip(channels, data.T))
+            named = dict(zip(channels, data.T, strict=True))
             if "Xposition" in named:
                 translation = np.stack([named[f"{a}position"] for a in "XYZ"], axis=1)
             axes = "".join(c[0] for c in channels if c.endswith("rotation"))
@@ -93,8 +93,8 @@ def test_finger_offsets_are_bone_lengths_and_hinges_use_one_channel(tmp_path):
     joints, _, values = parse_bvh(path.read_text())
     named = {j["name"]: j for j in joints if j["name"]}
     pip = named["index_pip"]
-    np.testing.assert_allclose(pip["offset"], [0, motion.bone_lengths[skeleton.index("index_pip")], 0],
-                               atol=1e-6)
+    pip_length = motion.bone_lengths[skeleton.index("index_pip")]
+    np.testing.assert_allclose(pip["offset"], [0, pip_length, 0], atol=1e-6)
     assert pip["channels"] == ["Xrotation", "Zrotation", "Yrotation"]
     assert named["index_mcp"]["channels"][:3] == ["Xposition", "Yposition", "Zposition"]
     start = sum(len(j["channels"]) for j in joints[:joints.index(pip)])

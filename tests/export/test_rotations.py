@@ -82,7 +82,8 @@ def test_rest_pose_is_a_flat_hand_along_y(name):
     np.testing.assert_allclose(forward_kinematics(pose, skeleton)[0], positions, atol=1e-12)
     np.testing.assert_allclose(pose.rotations[0, skeleton.root], [1, 0, 0, 0], atol=1e-12)
     np.testing.assert_allclose(positions[:, 2], 0.0, atol=1e-12)
-    tips = [j for j, r in enumerate(skeleton.roles) if r == "tip" and skeleton.fingers[j] != "thumb"]
+    tips = [j for j, (r, f) in enumerate(zip(skeleton.roles, skeleton.fingers, strict=True))
+            if r == "tip" and f != "thumb"]
     assert np.all(positions[tips, 1] > 0)
     assert positions[skeleton.index("thumb_tip"), 0] > positions[skeleton.index("index_tip"), 0]
 

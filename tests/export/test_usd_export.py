@@ -39,9 +39,11 @@ def test_every_registered_validator_passes(mediapipe_motion, tmp_path, suffix):
     assert validation_errors(clip.stage) == []
 
 
-@pytest.mark.parametrize(("units", "fps"), [("mm", 30.0), ("cm", 120.0), ("m", 24.0), ("in", 59.94)])
+@pytest.mark.parametrize(("units", "fps"),
+                         [("mm", 30.0), ("cm", 120.0), ("m", 24.0), ("in", 59.94)])
 def test_stage_metadata(mediapipe_motion, tmp_path, units, fps):
-    stage = open_skeleton(export(mediapipe_motion, tmp_path / "clip.usda", units=units, fps=fps)).stage
+    path = export(mediapipe_motion, tmp_path / "clip.usda", units=units, fps=fps)
+    stage = open_skeleton(path).stage
     assert UsdGeom.GetStageUpAxis(stage) == UsdGeom.Tokens.y
     assert UsdGeom.GetStageMetersPerUnit(stage) == METERS_PER_UNIT[units]
     assert stage.GetTimeCodesPerSecond() == fps
@@ -62,7 +64,8 @@ def test_skeleton_and_animation_layout(mediapipe_motion, tmp_path):
     assert [p.rpartition("/")[2] for p in joints] == list(skeleton.joints)
     assert len(skel.GetBindTransformsAttr().Get()) == len(skel.GetRestTransformsAttr().Get()) == 21
     anim = UsdSkel.Animation(stage.GetPrimAtPath("/RightHand/Animation"))
-    assert UsdSkel.BindingAPI(skel.GetPrim()).GetAnimationSourceRel().GetTargets() == [anim.GetPath()]
+    source = UsdSkel.BindingAPI(skel.GetPrim()).GetAnimationSourceRel()
+    assert source.GetTargets() == [anim.GetPath()]
     frames = list(range(len(mediapipe_motion.xyz)))
     for attribute in (anim.GetRotationsAttr(), anim.GetTranslationsAttr(), anim.GetScalesAttr()):
         assert attribute.GetTimeSamples() == frames
@@ -93,7 +96,8 @@ def test_mesh_skinning_matches_the_posed_hand(mediapipe_motion, tmp_path):
 def test_given_rotations_are_exported(mediapipe_motion, tmp_path):
     skeleton, lengths = mediapipe_motion.skeleton, mediapipe_motion.bone_lengths
     still = rest_pose(skeleton, lengths)
-    path = export(mediapipe_motion, tmp_path / "c.usdc", xyz=mediapipe_motion.xyz[:1], rotations=still)
+    path = export(mediapipe_motion, tmp_path / "c.usdc", xyz=mediapipe_motion.xyz[:1],
+                  rotations=still)
     clip = open_skeleton(path)
     np.testing.assert_allclose(joint_world_positions(clip.skel_query, 1)[0],
                                CAMERA_TO_Y_UP.apply(rest_positions(skeleton, lengths)), atol=1e-4)
