@@ -25,7 +25,7 @@ from prefect.task_runners import ThreadPoolTaskRunner
 
 from handdb import __version__, pipeline, progress, tables
 from handdb.quarantine import Refusal, quarantine_table
-from handdb.readers import InboxScan, discover
+from handdb.readers import InboxScan, content_hash, discover
 from handdb.store import Store
 
 #: Clips whose task chains run at once; bounds memory and the thread pool's queue.
@@ -152,11 +152,11 @@ def build(
         scan = scan_inbox(inbox)
         summary.n_clips = len(scan.clips)
         progress.expect(summary.n_clips)
-        summary.refusals.extend(Refusal.from_error(e) for e in scan.errors)
+        summary.refusals.extend(Refusal.from_error(e) for e in scan.refused)
         committed = store.clip_build_keys()
         todo = []
         for entry in scan.clips:
-            key = pipeline.build_key(entry.content_hash, options)
+            key = pipeline.build_key(content_hash(entry), options)
             if committed.get(entry.clip_id) == key:
                 summary.unchanged.append(entry.clip_id)
                 progress.advance(entry.clip_id, "unchanged")

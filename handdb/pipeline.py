@@ -19,7 +19,10 @@ import pyarrow as pa
 
 from handdb import __version__, tables
 from handdb.clip import Clip
+from handdb.errors import InputError
 from handdb.paths import SCHEMAS_DIR
+from handdb.quarantine import Refusal
+from handdb.readers import ClipEntry, load_clip, tracks_2d_table, truth_3d_table
 
 PACKAGE_DIR = Path(__file__).resolve().parent
 
@@ -98,6 +101,15 @@ class ClipResult:
     extra_tables: dict[str, pa.Table] = field(default_factory=dict)
 
 
+def ingest(entry: ClipEntry, key: str) -> ClipResult | Refusal:
+    """Read and validate the clip's files; a refusal names the file, line and field."""
+    try:
+        clip = load_clip(entry)
+    except InputError as error:
+        return Refusal.from_error(error, clip_id=entry.clip_id)
+    return start_result(clip, key)
+
+
 def start_result(clip: Clip, key: str) -> ClipResult:
     """A result holding only the ingested clip: observed points, nothing filled or lifted."""
     uv = np.where(clip.observed[..., None], clip.uv, np.nan)
@@ -142,6 +154,29 @@ def joints_3d_table(result: ClipResult) -> pa.Table:
         "sign_confidence": _per_point(result.sign_confidence, (n,)),
         "length_inconsistency": _per_point(result.length_inconsistency, (n,)),
     })
+
+
+def _relative(path: str, inbox: Path) -> str:
+    try:
+        return Path(path).resolve().relative_to(inbox.resolve()).as_posix()
+    except ValueError:
+        return str(path)
+
+
+def clip_tables(result: ClipResult, inbox: Path) -> dict[str, pa.Table]:
+    """Every per-clip table of the result, ready for :meth:`handdb.store.Store.commit_clip`."""
+    clip = result.clip
+    source_files = [_relative(f, inbox) for f in clip.source_files]
+    out = {
+        "clips": clips_table(result, source_files),
+        "tracks_2d": tracks_2d_table(clip),
+        "joints_3d": joints_3d_table(result),
+        **result.extra_tables,
+    }
+    truth = truth_3d_table(clip)
+    if truth is not None:
+        out["truth_3d"] = truth
+    return out
 
 
 def clips_table(result: ClipResult, source_files: list[str]) -> pa.Table:

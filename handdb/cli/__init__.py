@@ -179,12 +179,11 @@ def serve(
 
 
 @app.command()
-def demo(inbox: str = InboxOption, db: str = DbOption,
-         clips: int = typer.Option(6, min=1, help="Synthetic clips to generate.")) -> None:
+def demo(inbox: str = InboxOption, db: str = DbOption) -> None:
     """Generate sample inputs, build the demo database and print what it holds."""
     from handdb.demo import describe_database, write_demo_inbox
 
-    written = write_demo_inbox(Path(inbox), n_clips=clips)
+    written = write_demo_inbox(Path(inbox))
     console.print(f"wrote {len(written)} sample inputs to {inbox}")
     summary = run_build(inbox, db)
     print_summary(summary)
