@@ -49,7 +49,7 @@ from handdb.lifting.hand_layout import CHAIN_BONES, HandLayout, hand_layout
 from handdb.lifting.pinhole import lift_perspective
 from handdb.lifting.registry import register
 from handdb.lifting.result import LiftResult
-from handdb.lifting.temporal import pooled_log_odds, run_labels, sigmoid, smooth_scale
+from handdb.lifting.temporal import flip_costs, sigmoid, sign_posterior, smooth_scale
 from handdb.skeletons import Skeleton
 
 #: Every sign pattern of a finger's three bones, ``(8, 3)``; row ``k`` has bit ``b`` of
@@ -70,6 +70,14 @@ DIP_PIP_RATIO = 2.0 / 3.0
 
 #: Standard deviation of the DIP flexion about ``DIP_PIP_RATIO`` times the PIP's, degrees.
 COUPLING_SIGMA_DEG = 25.0
+
+#: A weak prior toward relaxed poses: each joint's flexion ~ N(centre, sigma), degrees.
+#: It settles the frames where a finger fits either palm tilt, flexed a little or a lot.
+COMFORT_CENTRE_DEG = 15.0
+COMFORT_SIGMA_DEG = 45.0
+
+#: Smallest spread of a bone's frame-to-frame depth change, as a share of its length.
+TEMPORAL_FLOOR = 0.05
 
 #: The clip-wide mirror counts as settled when it is this many times less likely.
 MIRROR_SETTLED_ODDS = 20.0
@@ -186,6 +194,8 @@ def finger_log_likelihood(xy: np.ndarray, abs_dz: np.ndarray, palm_z: np.ndarray
     cost = np.sum((excess / np.radians(RANGE_SOFTNESS_DEG))**2, axis=-1)
     coupling = (theta[..., 2] - DIP_PIP_RATIO * theta[..., 1]) / np.radians(COUPLING_SIGMA_DEG)
     cost = cost + np.where(layout.is_thumb[:, None], 0.0, coupling**2)
+    comfort = (theta - np.radians(COMFORT_CENTRE_DEG)) / np.radians(COMFORT_SIGMA_DEG)
+    cost = cost + np.sum(comfort**2, axis=-1)
     return np.nan_to_num(-0.5 * cost)
 
 
@@ -206,8 +216,8 @@ def _state_index(signs: np.ndarray) -> np.ndarray:
     return np.sum((signs < 0) * weights, axis=-1)
 
 
-def resolve_signs(xy: np.ndarray, abs_dz: np.ndarray, skeleton: Skeleton,
-                  hand: str) -> tuple[np.ndarray, np.ndarray, float]:
+def resolve_signs(xy: np.ndarray, abs_dz: np.ndarray, bone_lengths: np.ndarray,
+                  skeleton: Skeleton, hand: str) -> tuple[np.ndarray, np.ndarray, float]:
     """Depth sign of every bone, its confidence and the odds against the mirror.
 
     Parameters
@@ -216,6 +226,8 @@ def resolve_signs(xy: np.ndarray, abs_dz: np.ndarray, skeleton: Skeleton,
         ``(T, J, 2) float64``, clip units, image-plane positions.
     abs_dz
         ``(T, J) float64``, clip units, unsigned bone depths.
+    bone_lengths
+        ``(J,) float64``, clip units.
     skeleton, hand
         The clip's skeleton and hand.
 
@@ -239,13 +251,16 @@ def resolve_signs(xy: np.ndarray, abs_dz: np.ndarray, skeleton: Skeleton,
     log_lik = finger_log_likelihood(xy, abs_dz, palm_z, skeleton, layout, hand)
 
     evidence = logsumexp(log_lik, axis=-1).sum(axis=-1)                 # (T, 2)
-    tilt = np.sqrt(np.nanmean(abs_dz[:, layout.palm_bones] ** 2, axis=1))
-    palm_odds = pooled_log_odds(evidence[:, 0] - evidence[:, 1], run_labels(tilt))
+    tilt = np.sqrt(np.nanmean(abs_dz[:, layout.palm_bones] ** 2, axis=1, keepdims=True))
+    floor = TEMPORAL_FLOOR * np.nanmean(bone_lengths[layout.palm_bones], keepdims=True)
+    palm_odds = sign_posterior(evidence[:, :1] - evidence[:, 1:], flip_costs(tilt, floor))[:, 0]
     state = (palm_odds < 0).astype(np.int64)
     chosen = np.take_along_axis(log_lik, state[:, None, None, None], axis=1)[:, 0]
 
-    chain_dz = abs_dz[:, layout.chains]                                  # (T, F, 3)
-    finger_odds = pooled_log_odds(bone_log_odds(chosen), run_labels(chain_dz))
+    chain_dz = abs_dz[:, layout.chains].reshape(n_frames, -1)            # (T, F * 3)
+    floor = TEMPORAL_FLOOR * bone_lengths[layout.chains].ravel()
+    finger_odds = sign_posterior(bone_log_odds(chosen).reshape(n_frames, -1),
+                                 flip_costs(chain_dz, floor)).reshape(chosen.shape[:2] + (3,))
     finger_signs = np.where(finger_odds < 0, -1.0, 1.0)
 
     index = _state_index(finger_signs)[:, None, :, None]                # (T, 1, F, 1)
@@ -282,7 +297,7 @@ def lift_kinematic(uv: np.ndarray, skeleton: Skeleton, bone_lengths: np.ndarray,
     scale = smooth_scale(eq6_scale(projected, bone_lengths))
     abs_dz, inconsistency = depth_magnitudes(projected, bone_lengths, scale)
     xy = image / scale[:, None, None]
-    signs, confidence, mirror_log_odds = resolve_signs(xy, abs_dz, skeleton, hand)
+    signs, confidence, mirror_log_odds = resolve_signs(xy, abs_dz, bone_lengths, skeleton, hand)
     ambiguous = mirror_log_odds < np.log(MIRROR_SETTLED_ODDS)
     note = (f"clip-wide mirror not settled: the chosen depth signs are only "
             f"{np.exp(mirror_log_odds):.3g} times as likely as all of them flipped"

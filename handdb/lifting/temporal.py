@@ -1,11 +1,13 @@
-"""Temporal consistency of depth signs and a robust, smooth scale.
+"""Temporal consistency of depth signs, and a robust, smooth scale.
 
-A bone's depth sign can only change while the bone passes through the image plane, that
-is where its unsigned depth ``|dZ|`` has a local minimum over time. Between two such minima
-the sign is constant, so the evidence of every frame of the run can be pooled into one
-decision. This is the exact solution of a two-state chain whose transition cost is zero at
-the minima and infinite elsewhere, computed with array operations instead of a per-frame
-loop.
+A bone's depth sign is a two-state chain over the frames. Keeping the sign from one frame
+to the next costs nothing; flipping it makes the bone's depth jump by ``a + b`` instead of
+``|a − b|`` (``a``, ``b``: its unsigned depth in the two frames), so under Gaussian
+frame-to-frame depth changes of spread ``σ`` a flip costs ``2ab / σ²`` nats: free while the
+bone crosses the image plane, prohibitive while it points steeply toward or away from the
+camera. Posteriors of the chain come from the forward-backward algorithm, written as
+prefix products of 2×2 matrices computed by recursive doubling, so the work is array
+operations over all frames at once (``log2 T`` levels), never a loop over frames.
 """
 
 from __future__ import annotations
@@ -22,53 +24,90 @@ SCALE_PERCENTILE = 75.0
 #: Standard deviation of the Gaussian smoothing the scale, frames.
 SCALE_SMOOTHING_FRAMES = 3.0
 
+#: Posterior log-odds are clipped to this magnitude (a probability of 1 − 1e-13).
+MAX_LOG_ODDS = 30.0
 
-def run_labels(magnitude: np.ndarray) -> np.ndarray:
-    """Label the runs of frames between local minima of an unsigned depth.
+
+def flip_costs(magnitude: np.ndarray, floor: np.ndarray) -> np.ndarray:
+    """Cost in nats of flipping each chain's sign between consecutive frames.
 
     Parameters
     ----------
     magnitude
-        ``(T, ...) float64``: ``|dZ|`` of one or more bones (time on axis 0).
+        ``(T, K) float64``: unsigned depth of ``K`` chains (bones, or the palm's tilt).
+    floor
+        ``(K,) float64``: smallest spread of frame-to-frame depth change, same units.
 
     Returns
     -------
     numpy.ndarray
-        ``(T, ...) int64``: a run number per frame, increasing over time, unique per column
-        (labels of different columns never coincide). A frame at a local minimum starts a
-        new run.
+        ``(T, K) float64``: ``2ab / σ²`` between frame ``t − 1`` and ``t`` (row 0: 0), with
+        ``σ²`` the chain's mean squared frame-to-frame change of ``magnitude`` plus
+        ``floor²``.
     """
-    m = np.nan_to_num(magnitude, nan=0.0)
-    falling = np.zeros(m.shape, dtype=bool)
-    falling[1:] = m[1:] <= m[:-1]
-    rising_next = np.ones(m.shape, dtype=bool)
-    rising_next[:-1] = m[1:] > m[:-1]
-    minimum = falling & rising_next
-    minimum[0] = True
-    labels = np.cumsum(minimum.reshape(len(m), -1), axis=0)
-    offsets = np.cumsum(labels[-1]) - labels[-1]
-    return (labels + offsets).reshape(m.shape) if len(m) else labels.reshape(m.shape)
+    m = np.nan_to_num(magnitude)
+    spread = np.mean(np.diff(m, axis=0) ** 2, axis=0) + floor**2 if len(m) > 1 else floor**2
+    cost = np.zeros(m.shape)
+    cost[1:] = 2.0 * m[1:] * m[:-1] / spread
+    return cost
 
 
-def pooled_log_odds(log_odds: np.ndarray, labels: np.ndarray) -> np.ndarray:
-    """Sum per-frame log-odds over each run and hand every frame its run's total.
+def _normalised(matrices: np.ndarray) -> np.ndarray:
+    return matrices / np.max(matrices, axis=(-2, -1), keepdims=True)
+
+
+def _prefix_products(matrices: np.ndarray) -> np.ndarray:
+    """``out[t] = m[0] @ m[1] @ ... @ m[t]`` (each rescaled), by recursive doubling."""
+    n = len(matrices)
+    if n == 1:
+        return matrices
+    pairs = _normalised(matrices[0 : n - 1 : 2] @ matrices[1:n:2])
+    odd = _prefix_products(pairs)
+    out = np.empty_like(matrices)
+    out[0] = matrices[0]
+    out[1::2] = odd
+    out[2::2] = _normalised(odd[: (n - 1) // 2] @ matrices[2::2])
+    return out
+
+
+def sign_posterior(log_odds: np.ndarray, flip_cost: np.ndarray) -> np.ndarray:
+    """Posterior log-odds of the positive sign of each chain, given every frame.
 
     Parameters
     ----------
     log_odds
-        ``(T, ...) float64``, per-frame evidence for the positive sign.
-    labels
-        ``(T, ...) int64`` from :func:`run_labels`.
+        ``(T, K) float64``: each frame's own evidence for the positive sign.
+    flip_cost
+        ``(T, K) float64``: cost of flipping between frame ``t − 1`` and ``t``
+        (:func:`flip_costs`).
 
     Returns
     -------
     numpy.ndarray
-        ``(T, ...) float64``.
+        ``(T, K) float64``.
     """
-    flat = labels.ravel()
-    totals = np.bincount(flat, weights=np.nan_to_num(log_odds).ravel(),
-                         minlength=int(flat.max(initial=0)) + 1)
-    return totals[labels]
+    n_frames = len(log_odds)
+    if n_frames == 0:
+        return np.zeros(log_odds.shape)
+    half = 0.5 * np.nan_to_num(log_odds)
+    emission = np.stack([half, -half], axis=-1)                          # (T, K, 2)
+    flip = -np.broadcast_to(flip_cost, half.shape)
+    log_trans = np.stack([np.stack([np.zeros_like(flip), flip], -1),
+                          np.stack([flip, np.zeros_like(flip)], -1)], -2)  # (T, K, 2, 2)
+    log_step = log_trans + emission[..., None, :]
+    step = np.exp(log_step - np.max(log_step, axis=(-2, -1), keepdims=True))
+    start = np.exp(emission[0] - np.max(emission[0], axis=-1, keepdims=True))
+    forward = np.empty(emission.shape)
+    forward[0] = start
+    backward = np.ones(emission.shape)
+    if n_frames > 1:
+        prefix = _prefix_products(step[1:])
+        forward[1:] = np.einsum("ki,tkij->tkj", start, prefix)
+        suffix = _prefix_products(np.swapaxes(step[:0:-1], -2, -1))[::-1]
+        backward[:-1] = np.sum(suffix, axis=-2)
+    with np.errstate(divide="ignore"):
+        log_joint = np.log(forward) + np.log(backward)
+    return np.clip(log_joint[..., 0] - log_joint[..., 1], -MAX_LOG_ODDS, MAX_LOG_ODDS)
 
 
 def smooth_scale(bounds: np.ndarray) -> np.ndarray:
