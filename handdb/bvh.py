@@ -28,6 +28,7 @@ from pathlib import Path
 import numpy as np
 from scipy.spatial.transform import Rotation
 
+from handdb.errors import StageError
 from handdb.rotations import CAMERA_TO_Y_UP, JointMotion, joint_rotations, rest_pose, turn_root
 from handdb.skeletons import Skeleton
 
@@ -149,12 +150,21 @@ def export_clip_bvh(
     -------
     pathlib.Path
         ``path``.
+
+    Raises
+    ------
+    StageError
+        If ``xyz`` has frames with missing joints (fill gaps first).
     """
     path = Path(path)
     if not fps > 0:
         raise ValueError(f"fps must be positive, got {fps}")
     bone_lengths = np.asarray(bone_lengths, dtype=np.float64)
     if rotations is None:
+        missing = ~np.isfinite(xyz).all(axis=(1, 2))
+        if missing.any():
+            raise StageError(f"{path}: {missing.sum()} of {len(xyz)} frames have joints "
+                             "without a 3D position; fill the gaps before exporting")
         rotations = joint_rotations(xyz, skeleton, bone_lengths)
     offsets = rest_pose(skeleton, bone_lengths).translations[0]
     offsets[skeleton.root] = 0.0
