@@ -16,11 +16,11 @@ Where the numbers come from
 ---------------------------
 * Metacarpal and total finger lengths as fractions of hand length (wrist crease to the tip
   of the middle finger) follow the link-length proportions of Buchholz, Armstrong &
-  Goldstein (1992), *Anthropometric data for describing the kinematics of the human hand*,
-  Ergonomics 35(3).
+  Goldstein (1992), *Ergonomics* 35(3) (:data:`handdb.anthropometry.BUCHHOLZ_1992`).
 * The split of a finger's length among its phalanges follows the X-ray measurements of
-  Chaudhry, You, Jin & Zhang (seed document ``002``, Table 1): the relative length of each
-  phalanx, their mean and their observed minimum and maximum over five hands.
+  Chaudhry, You, Jin & Zhang (seed document ``002``, Table 1, shipped as
+  :func:`handdb.ratios.table1_measurements`): the relative length of each phalanx, its
+  mean, standard deviation, minimum and maximum over the five hands.
 * The layout of the carpometacarpal joints and the resting splay of the rays are
   hand-chosen to reproduce typical MCP spacing (about 18 mm for a 185 mm hand) and the
   MCP arc (middle highest, little lowest).
@@ -29,69 +29,41 @@ Where the numbers come from
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cache
 
 import numpy as np
+import pyarrow.compute as pc
 
+from handdb.anthropometry import BUCHHOLZ_1992
 from handdb.errors import BoneLengthError, SkeletonError
+from handdb.ratios import relative_lengths, table1_measurements
 from handdb.skeletons import FINGERS, Skeleton, load_skeleton
 
 #: Hand length (wrist crease to middle fingertip) of an average adult, mm.
 DEFAULT_HAND_LENGTH_MM = 185.0
 
-#: Long fingers, radial to ulnar.
-LONG_FINGERS: tuple[str, ...] = FINGERS[1:]
-
-#: Phalanx lengths measured on five X-ray images (Chaudhry et al., Table 1), image units.
-#: Rows are the images (Figure 1a-1e); columns the phalanges from proximal to distal.
-XRAY_PHALANGES: dict[str, np.ndarray] = {
-    "index": np.array([
-        [339.96, 188.83, 169.67], [342.47, 195.24, 186.70], [359.67, 206.58, 173.53],
-        [417.16, 225.70, 183.67], [375.25, 214.96, 203.47],
-    ]),
-    "middle": np.array([
-        [375.28, 255.60, 184.37], [389.42, 239.15, 197.31], [394.47, 260.98, 195.31],
-        [446.49, 261.72, 209.62], [419.47, 271.77, 223.35],
-    ]),
-    "ring": np.array([
-        [358.40, 226.47, 191.09], [372.98, 226.72, 212.12], [366.78, 247.01, 200.40],
-        [442.49, 267.65, 227.06], [382.13, 247.86, 219.75],
-    ]),
-    "little": np.array([
-        [284.66, 174.72, 169.11], [291.24, 166.72, 170.56], [289.73, 172.52, 180.18],
-        [334.51, 180.32, 196.25], [294.10, 168.67, 195.09],
-    ]),
-    "thumb": np.array([
-        [270.83, 230.95], [259.53, 251.34], [264.05, 231.33], [301.67, 264.72],
-        [285.76, 239.81],
-    ]),
-}
-
-
+@cache
 def xray_ratios(finger: str) -> np.ndarray:
-    """Relative phalanx lengths of ``finger`` on each X-ray image.
+    """Relative phalanx lengths of ``finger`` on each X-ray image of Chaudhry et al.
 
     Returns
     -------
     (M, K) float64
-        Each phalanx's length over the finger's total length; rows sum to 1.
+        Per image (rows, the paper's Figure 1a-1e), each phalanx's length over the
+        finger's total length, proximal to distal; rows sum to 1.
     """
-    lengths = XRAY_PHALANGES[finger]
-    return lengths / lengths.sum(axis=1, keepdims=True)
+    relative = relative_lengths(table1_measurements())
+    rows = relative.filter(pc.equal(relative.column("finger"), finger)).sort_by(
+        [("image_id", "ascending"), ("segment", "ascending")])
+    n_images = len(pc.unique(rows.column("image_id")))
+    return rows.column("ratio").to_numpy().reshape(n_images, -1)
 
 
-#: Metacarpal length (CMC to MCP joint centre), fraction of hand length (Buchholz 1992).
-METACARPAL_FRACTION: dict[str, float] = {
-    "thumb": 0.251, "index": 0.374, "middle": 0.373, "ring": 0.336, "little": 0.295,
-}
+#: Metacarpal length (CMC to MCP joint centre), fraction of hand length.
+METACARPAL_FRACTION: dict[str, float] = {f: c[0] for f, c in BUCHHOLZ_1992.items()}
 
-#: Sum of the phalanges (MCP joint to fingertip), fraction of hand length (Buchholz 1992).
-FINGER_FRACTION: dict[str, float] = {
-    "thumb": 0.196 + 0.158,
-    "index": 0.265 + 0.143 + 0.097,
-    "middle": 0.277 + 0.170 + 0.108,
-    "ring": 0.259 + 0.165 + 0.107,
-    "little": 0.206 + 0.117 + 0.093,
-}
+#: Sum of the phalanges (MCP joint to fingertip), fraction of hand length.
+FINGER_FRACTION: dict[str, float] = {f: sum(c[1:]) for f, c in BUCHHOLZ_1992.items()}
 
 #: Carpometacarpal joint centres in the palm plane, ``(x, y)`` as fractions of hand length.
 CMC_POSITION: dict[str, tuple[float, float]] = {
@@ -123,6 +95,10 @@ PALM_FOLD_FRACTION = 2.0 / 3.0
 #: the spread of adult metacarpal and finger proportions) and the clip at two sigma.
 LENGTH_VARIATION = 0.03
 VARIATION_CLIP_SIGMA = 2.0
+
+#: Dirichlet concentration of the mixture of X-ray hands a subject's phalanx ratios are
+#: drawn from; below 1 favours mixtures close to one X-ray hand, keeping the X-ray spread.
+XRAY_MIXTURE_CONCENTRATION = 0.5
 
 PALM_NORMAL = np.array([0.0, 0.0, 1.0])
 
@@ -226,9 +202,10 @@ class HandProportions:
 
         Metacarpal and finger lengths and the palm breadth are scaled by
         ``1 + LENGTH_VARIATION * n`` with ``n`` standard normal, clipped at
-        ``VARIATION_CLIP_SIGMA``. Phalanx ratios are drawn around the X-ray mean with the
-        X-ray standard deviation, kept within the X-ray minimum and maximum, and the
-        distal phalanx takes the remainder.
+        ``VARIATION_CLIP_SIGMA``. A finger's phalanx ratios are a random convex mixture
+        (Dirichlet weights, concentration ``XRAY_MIXTURE_CONCENTRATION``) of the X-ray
+        hands' ratios, so they sum to 1 and each stays within the X-ray minimum and
+        maximum.
         """
         def factor() -> float:
             n = np.clip(rng.standard_normal(), -VARIATION_CLIP_SIGMA, VARIATION_CLIP_SIGMA)
@@ -236,11 +213,9 @@ class HandProportions:
 
         ratios = {}
         for finger in FINGERS:
-            observed = xray_ratios(finger)[:, :-1]
-            drawn = observed.mean(axis=0) + observed.std(axis=0, ddof=1) * rng.standard_normal(
-                observed.shape[1])
-            drawn = np.clip(drawn, observed.min(axis=0), observed.max(axis=0))
-            ratios[finger] = np.append(drawn, 1.0 - drawn.sum())
+            observed = xray_ratios(finger)
+            weights = rng.dirichlet(np.full(len(observed), XRAY_MIXTURE_CONCENTRATION))
+            ratios[finger] = weights @ observed
         return cls(
             metacarpal={f: v * factor() for f, v in METACARPAL_FRACTION.items()},
             finger={f: v * factor() for f, v in FINGER_FRACTION.items()},

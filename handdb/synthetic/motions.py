@@ -88,7 +88,7 @@ def _fingers(mcp: float, curl: float, **thumb: float) -> np.ndarray:
 
 #: Key poses of everyday gestures, radians.
 OPEN = pose(thumb_cmc_abduction=10.0)
-FIST = _fingers(85.0, 100.0, thumb_cmc_flexion=35.0, thumb_cmc_abduction=35.0,
+FIST = _fingers(80.0, 95.0, thumb_cmc_flexion=35.0, thumb_cmc_abduction=35.0,
                 thumb_mcp_flexion=45.0, thumb_ip_flexion=50.0)
 SPREAD = pose(index_mcp_abduction=15.0, ring_mcp_abduction=12.0, little_mcp_abduction=25.0,
               thumb_cmc_flexion=-10.0, thumb_cmc_abduction=40.0)
