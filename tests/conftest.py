@@ -14,7 +14,9 @@ SHARED_DATA = REPO.parent / "shared" / "data"
 # Each xdist worker gets its own PREFECT_HOME (processes sharing a new database race on
 # creating it); homes persist under .prefect/ so later runs reuse their databases.
 _worker = os.environ.get("PYTEST_XDIST_WORKER", "main")
-os.environ["PREFECT_HOME"] = str(REPO / ".prefect" / f"test-{_worker}")
+_prefect_home = REPO / ".prefect" / f"test-{_worker}"
+_prefect_home.mkdir(parents=True, exist_ok=True)
+os.environ["PREFECT_HOME"] = str(_prefect_home)
 os.environ.setdefault("PREFECT_SERVER_ANALYTICS_ENABLED", "false")
 os.environ.setdefault("PREFECT_SERVER_LOGGING_LEVEL", "CRITICAL")
 os.environ.setdefault("PREFECT_LOGGING_LEVEL", "WARNING")
