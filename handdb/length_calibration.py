@@ -6,13 +6,18 @@ prior on the sizes, but for joint positions (a tracker's 3D output, or markers p
 the joints): each bone's length is then observed directly in every frame in which both
 of its joints are present, and no pose needs fitting. The lengths ``s`` minimise
 
-    sum over frames t and bones b of  rho(((d_tb - s_b) / sigma_b)^2)
+    sum over frames t and bones b of  rho(((d_tb - sqrt(s_b^2 + 2 sigma_b^2)) / sigma_b)^2)
     + weight * sum over phalanges k of  ((s_k / S_f(k) - mu_k) / std_k)^2
 
-where ``d_tb`` is the bone's length in frame ``t``, ``sigma_b`` a robust spread of the
-bone's lengths (1.4826 median absolute deviation), ``rho`` a robust loss (soft L1: frames
-where a joint jumped count linearly, not quadratically), and the second term the X-ray
-prior: the relative length of each phalanx within its finger (``S_f`` the sum of the
+where ``d_tb`` is the bone's length in frame ``t`` and ``sigma_b`` the robust spread of
+those lengths (1.4826 median absolute deviation). Noise on the two ends makes a bone look
+longer, not shorter: with isotropic noise of variance ``sigma^2`` per axis on the
+difference of its ends, ``E[d^2] = s^2 + 3 sigma^2`` and ``d`` spreads by about
+``sigma`` along the bone, so ``d`` centres on ``sqrt(s^2 + 2 sigma^2)``; a plain median
+of ``d`` keeps that bias. ``rho`` is a robust loss (Cauchy by default: a frame where a
+joint jumped barely counts), folded into the residuals so that
+:func:`scipy.optimize.least_squares` leaves the prior quadratic; the second term is the
+X-ray prior: the relative length of each phalanx within its finger (``S_f`` the sum of the
 finger's phalanges) should lie near the mean ratio ``mu_k`` of Chaudhry et al., with
 their spread ``std_k``. ``weight`` is the prior's worth in frames: with ``weight=1`` the
 ratios count as much as one more frame of every phalanx.
@@ -23,10 +28,12 @@ together through forward kinematics); this one needs no hand model and suits any
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
 import pyarrow as pa
+from scipy import sparse
 from scipy.optimize import least_squares
 
 from handdb.ratios import bone_ratios
@@ -35,8 +42,19 @@ from handdb.skeletons import Skeleton
 #: Scale from the median absolute deviation to the standard deviation of a normal.
 MAD_TO_SIGMA = 1.4826
 
-#: Robust loss of :func:`scipy.optimize.least_squares` for the per-frame residuals.
-DEFAULT_LOSS = "soft_l1"
+#: Robust losses rho(z^2) of the per-frame residuals, as scipy.optimize.least_squares
+#: names them. They are applied to the frames only, so the prior stays quadratic.
+ROBUST_LOSSES: dict[str, Callable[[np.ndarray], np.ndarray]] = {
+    "cauchy": np.log1p,
+    "soft_l1": lambda z2: 2.0 * (np.sqrt(1.0 + z2) - 1.0),
+    "linear": lambda z2: z2,
+}
+
+#: The loss of the per-frame residuals unless the caller names another.
+DEFAULT_LOSS = "cauchy"
+
+#: The per-frame length of a bone centres on sqrt(s^2 + NOISE_BIAS * sigma^2).
+NOISE_BIAS = 2.0
 
 #: Floor of a bone's robust spread, relative to its median length, so that exact
 #: (noise-free) data do not divide by zero.
@@ -53,10 +71,12 @@ class CalibrationResult:
         ``(J,) float64``, input units: length of the bone ending at each joint; NaN for
         the root and for bones never observed.
     median
-        ``(J,) float64``: the per-bone median over frames, where the fit starts.
+        ``(J,) float64``: the per-bone median over frames, where the fit starts (the
+        baseline the fit improves on).
     residuals
         ``(J,) float64``, input units: median absolute difference between a bone's
-        per-frame length and its fitted length.
+        per-frame length and the length the fit expects to see (its fitted length
+        widened by the noise, see the module docstring).
     n_frames
         ``(J,) int64``: frames in which the bone was observed.
     prior_deviation
@@ -124,8 +144,8 @@ def calibrate_bone_lengths(
     weight
         Worth of the ratio prior, in frames (see the module docstring); ``>= 0``.
     loss
-        Robust loss of :func:`scipy.optimize.least_squares` (``soft_l1``, ``huber``,
-        ``cauchy``, ``arctan``, or ``linear`` for plain least squares).
+        Robust loss of the per-frame residuals: ``cauchy``, ``soft_l1``, or ``linear``
+        for plain least squares (see :data:`ROBUST_LOSSES`).
 
     Returns
     -------
@@ -134,6 +154,9 @@ def calibrate_bone_lengths(
     """
     if weight < 0:
         raise ValueError(f"the prior's weight must be >= 0, got {weight}")
+    if loss not in ROBUST_LOSSES:
+        raise ValueError(f"unknown loss '{loss}'; losses: {', '.join(ROBUST_LOSSES)}")
+    rho = ROBUST_LOSSES[loss]
     per_frame = frame_bone_lengths(xyz, skeleton)
     observed = np.isfinite(per_frame)
     n_frames = observed.sum(axis=0)
@@ -153,19 +176,27 @@ def calibrate_bone_lengths(
     prior_scale = np.sqrt(weight) / std[has_prior]
 
     def residuals(lengths: np.ndarray) -> np.ndarray:
-        frames = (data - lengths[bone]) / sigma[bone]
+        expected = np.sqrt(lengths[bone] ** 2 + NOISE_BIAS * sigma[bone] ** 2)
+        z = (data - expected) / sigma[bone]
+        frames = np.sign(z) * np.sqrt(rho(z**2))
         relative = lengths[prior] / (finger_sum @ lengths)
         return np.concatenate([frames, (relative - mean[has_prior]) * prior_scale])
 
-    solution = least_squares(residuals, median[fitted], loss=loss, f_scale=1.0,
-                             bounds=(0.0, np.inf), x_scale="jac")
+    sparsity = sparse.vstack([
+        sparse.csr_matrix((np.ones(data.size), (np.arange(data.size), bone)),
+                          shape=(data.size, fitted.sum())),
+        sparse.csr_matrix(finger_sum),
+    ])
+    solution = least_squares(residuals, median[fitted], bounds=(0.0, np.inf), x_scale="jac",
+                             jac_sparsity=sparsity)
     lengths = np.full(skeleton.n_joints, np.nan)
     lengths[fitted] = solution.x
     deviation = np.full(skeleton.n_joints, np.nan)
     deviation[has_prior] = (solution.x[prior] / (finger_sum @ solution.x)
                             - mean[has_prior]) / std[has_prior]
     residual = np.full(skeleton.n_joints, np.nan)
-    residual[fitted] = np.nanmedian(np.abs(per_frame[:, fitted] - solution.x), axis=0)
+    expected = np.sqrt(solution.x ** 2 + NOISE_BIAS * sigma ** 2)
+    residual[fitted] = np.nanmedian(np.abs(per_frame[:, fitted] - expected), axis=0)
     return CalibrationResult(
         lengths=lengths,
         median=median,
