@@ -14,8 +14,13 @@ import numpy as np
 import pyarrow as pa
 
 from handdb import tables
-from handdb.synthetic.hand_model import DEFAULT_HAND_LENGTH_MM, HandModel, make_hand, \
-    mirror_sign, thesis_hand
+from handdb.synthetic.hand_model import (
+    DEFAULT_HAND_LENGTH_MM,
+    HandModel,
+    make_hand,
+    mirror_sign,
+    thesis_hand,
+)
 from handdb.synthetic.kinematics import PALM_TO_CAMERA, forward_kinematics, local_kinematics
 from handdb.synthetic.motions import FIST, OPEN, Motion, make_motion
 from handdb.synthetic.projection import project_orthographic, project_pinhole
@@ -96,7 +101,7 @@ class SyntheticClip:
         return self.xyz.shape[0]
 
     def sidecar(self, subject: str = "synthetic") -> dict[str, Any]:
-        """The content of this clip's ``<clip_id>.clip.json`` sidecar."""
+        """Return the content of this clip's ``<clip_id>.clip.json`` sidecar."""
         width, height = self.image_size
         return {
             "skeleton": self.skeleton, "hand": self.hand, "fps": self.fps,
@@ -106,7 +111,7 @@ class SyntheticClip:
         }
 
     def truth_table(self, clip_id: str) -> pa.Table:
-        """The ``truth_3d`` table of this clip: one row a frame and joint."""
+        """Return this clip's ``truth_3d`` table: one row a frame and joint."""
         n_frames, n_joints = self.xyz.shape[:2]
         flat = self.xyz.reshape(-1, 3)
         return tables.from_columns("truth_3d", {
@@ -225,7 +230,7 @@ def synthesize_clip(
     hand_length_mm: float = DEFAULT_HAND_LENGTH_MM,
     noise_px: float = 0.0,
 ) -> SyntheticClip:
-    """A synthetic clip of ``motion`` by a procedural hand, in mm.
+    """Synthesize a clip of ``motion`` by a procedural hand, in mm.
 
     Parameters
     ----------
@@ -259,7 +264,7 @@ def synthesize_clip(
 
 
 def thesis_clench_clip(hand: str = "right") -> SyntheticClip:
-    """The thesis's experiment: its Maya hand clenching into a fist, palm to the camera.
+    """Reproduce the thesis's experiment: its Maya hand clenching, palm to the camera.
 
     100 frames of ``clench`` on ``thesis21`` with exactly the appendix's segment lengths
     (Maya units, taken as cm), the palm facing the camera and still, seen by an

@@ -189,7 +189,7 @@ class HandProportions:
 
     @classmethod
     def mean(cls) -> HandProportions:
-        """The average hand: tabulated fractions and the mean X-ray ratios."""
+        """Return the average hand: tabulated fractions and the mean X-ray ratios."""
         return cls(
             metacarpal=dict(METACARPAL_FRACTION),
             finger=dict(FINGER_FRACTION),
@@ -225,7 +225,7 @@ class HandProportions:
 
 
 def _unit(angle_deg: float) -> np.ndarray:
-    """Unit vector in the palm plane, ``angle_deg`` from ``+y`` toward ``+x``."""
+    """Return the palm-plane unit vector ``angle_deg`` from ``+y`` toward ``+x``."""
     a = np.radians(angle_deg)
     return np.array([np.sin(a), np.cos(a), 0.0])
 
@@ -261,7 +261,7 @@ def canonical_layout(proportions: HandProportions) -> dict[str, np.ndarray]:
 
 
 def _flexion_side(skeleton: Skeleton, joint: int) -> np.ndarray:
-    """The direction a bone bends toward when it flexes, at rest (right hand)."""
+    """Return the direction a bone bends toward when it flexes, at rest (right hand)."""
     if skeleton.fingers[joint] != "thumb" or skeleton.roles[joint] == "cmc":
         return PALM_NORMAL
     along = _unit(FINGER_ANGLE_DEG["thumb"])
@@ -337,7 +337,7 @@ def make_hand(
 
 
 def thesis_hand(hand: str = "right") -> HandModel:
-    """The thesis's Maya hand: ``thesis21`` with exactly its appendix segment lengths.
+    """Build the thesis's Maya hand: ``thesis21`` with exactly its appendix lengths.
 
     Bone lengths are the skeleton's ``reference_lengths`` (Maya units, taken as cm); bone
     directions at rest are those of the average procedural hand.

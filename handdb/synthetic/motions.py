@@ -63,7 +63,7 @@ class Motion:
 
 
 def pose(**degrees: float) -> np.ndarray:
-    """A pose vector ``(N_ANGLES,)`` radians from angles in degrees; others are 0.
+    """Return a pose vector ``(N_ANGLES,)`` radians from angles in degrees; others 0.
 
     ``pip`` and ``dip`` flexion of a long finger may be given as ``<finger>_curl``: the PIP
     flexion, with the DIP following at :data:`DIP_PIP_COUPLING` of it.
@@ -80,7 +80,7 @@ def pose(**degrees: float) -> np.ndarray:
 
 
 def _fingers(mcp: float, curl: float, **thumb: float) -> np.ndarray:
-    """A pose with every long finger at the same MCP flexion and curl (degrees)."""
+    """Return a pose with every long finger at one MCP flexion and curl (degrees)."""
     spec = {f"{f}_mcp_flexion": mcp for f in LONG_FINGERS}
     spec.update({f"{f}_curl": curl for f in LONG_FINGERS})
     return pose(**spec, **thumb)
@@ -104,7 +104,7 @@ GESTURES: dict[str, np.ndarray] = {
 
 
 def minimum_jerk(tau: np.ndarray) -> np.ndarray:
-    """The minimum-jerk profile ``10 t^3 - 15 t^4 + 6 t^5`` of ``tau`` clipped to [0, 1]."""
+    """Evaluate the minimum-jerk profile ``10 t^3 - 15 t^4 + 6 t^5``, ``t`` in [0, 1]."""
     t = np.clip(tau, 0.0, 1.0)
     return t**3 * (10.0 - 15.0 * t + 6.0 * t**2)
 
@@ -141,7 +141,7 @@ CLENCH_JITTER_S = 0.02
 
 
 def clench(n_frames: int, fps: float, rng: np.random.Generator) -> Motion:
-    """An open hand closing into a fist, palm facing the camera and still.
+    """Close an open hand into a fist, the palm facing the camera and still.
 
     Every finger closes along a minimum-jerk profile over the same duration, the little
     finger first and the index and thumb last; the fist is held for the last
@@ -175,16 +175,15 @@ def rapid(n_frames: int, fps: float, rng: np.random.Generator) -> Motion:
     flexing up to +-20 deg and deviating up to +-15 deg, while the hand drifts a little.
     """
     duration = n_frames / fps
-    names = list(GESTURES)
-    times, keys = [0.0], [OPEN]
-    while times[-1] < duration:
-        gesture = GESTURES[names[rng.integers(len(names))]]
-        arrive = times[-1] + rng.uniform(*RAPID_TRANSITION_S)
-        leave = arrive + rng.uniform(*RAPID_HOLD_S)
-        times += [arrive, leave]
-        keys += [gesture, gesture]
-    times = np.array(times)
-    angles = _keyframed(times, np.array(keys), n_frames, fps)
+    n_gestures = int(np.ceil(duration / RAPID_TRANSITION_S[0])) + 1
+    chosen = np.array(list(GESTURES.values()))[rng.integers(len(GESTURES), size=n_gestures)]
+    steps = np.stack([rng.uniform(*RAPID_TRANSITION_S, n_gestures),
+                      rng.uniform(*RAPID_HOLD_S, n_gestures)], axis=1).ravel()
+    times = np.concatenate([[0.0], np.cumsum(steps)])
+    keys = np.concatenate([OPEN[None], np.repeat(chosen, 2, axis=0)])
+    last = int(np.searchsorted(times, duration)) + 1
+    times, keys = times[:last], keys[:last]
+    angles = _keyframed(times, keys, n_frames, fps)
     wrist_keys = rng.uniform(-1.0, 1.0, size=(len(times), 3)) * RAPID_WRIST_DEG
     wrist_keys[0] = 0.0
     rotation = _wrist_rotation(_keyframed(times, wrist_keys, n_frames, fps))
