@@ -25,6 +25,7 @@ clip left with a bone no source can give.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -35,8 +36,7 @@ from handdb.anthropometry import hand_length_proportions
 from handdb.clip import Clip
 from handdb.errors import BoneLengthError
 from handdb.length_calibration import calibrate_bone_lengths, frame_bone_lengths
-from handdb.ratios import bone_ratios, table1_measurements
-from handdb.ratios import joint_ratios as compute_joint_ratios
+from handdb.ratios import bone_ratios, joint_ratios, table1_measurements
 from handdb.skeletons import Skeleton
 
 #: Every source of a bone length, in order of precedence.
@@ -205,10 +205,12 @@ class _Ledger:
         self.n_frames = np.zeros(skeleton.n_joints, dtype=np.int64)
 
     def missing(self) -> np.ndarray:
+        """``(J,) bool``: the bones still without a length."""
         return np.isnan(self.lengths) & (self.skeleton.parents >= 0)
 
-    def add(self, source: str, lengths: np.ndarray, detail, *, residuals=None,
-            n_frames=None) -> None:
+    def add(self, source: str, lengths: np.ndarray, detail: Callable[[int], str], *,
+            residuals: np.ndarray | None = None, n_frames: np.ndarray | None = None) -> None:
+        """Take ``lengths`` (``(J,)``, NaN where none) for the bones still missing."""
         new = self.missing() & np.isfinite(lengths) & (lengths > 0)
         for j in np.flatnonzero(new):
             self.lengths[j] = lengths[j]
@@ -247,7 +249,7 @@ def clip_bone_lengths(clip: Clip, ratios: pa.Table | None = None, *,
         some bone can be had from no source; the message names the bones and the fix.
     """
     skeleton, spec = clip.skeleton, clip.spec
-    ratios = compute_joint_ratios(table1_measurements()) if ratios is None else ratios
+    ratios = joint_ratios(table1_measurements()) if ratios is None else ratios
     ledger = _Ledger(skeleton)
 
     given = np.array([spec.bone_lengths.get(j, np.nan) for j in skeleton.joints])
@@ -326,5 +328,5 @@ def bone_lengths_table(clip_id: str, subject: str, skeleton: Skeleton,
         "source": [bone_lengths.sources[c] for c in child],
         "detail": [bone_lengths.details[c] for c in child],
         "residual": pa.array(bone_lengths.residuals[child], from_pandas=True),
-        "n_frames": pa.array(np.where(n_frames > 0, n_frames, 0), mask=n_frames == 0),
+        "n_frames": pa.array(n_frames, mask=n_frames == 0),
     })
