@@ -7,6 +7,8 @@ thesis's Maya experiment.
 
 from __future__ import annotations
 
+import hashlib
+import json
 from dataclasses import dataclass
 from typing import Any
 
@@ -14,6 +16,8 @@ import numpy as np
 import pyarrow as pa
 
 from handdb import tables
+from handdb.clip import Camera, Clip, ClipSpec
+from handdb.skeletons import load_skeleton
 from handdb.synthetic.hand_model import (
     DEFAULT_HAND_LENGTH_MM,
     HandModel,
@@ -109,6 +113,25 @@ class SyntheticClip:
             "bone_lengths": dict(self.bone_lengths),
             "image": {"width": width, "height": height},
         }
+
+    def as_clip(self, clip_id: str = "synthetic", subject: str = "synthetic") -> Clip:
+        """Return this clip as a :class:`~handdb.clip.Clip` with its truth, as if read.
+
+        Every point is observed with confidence 1; ``source_format`` is ``"synthetic"``
+        and the content hash covers the pixels and the truth.
+        """
+        sidecar = self.sidecar(subject)
+        spec = ClipSpec(
+            clip_id=clip_id, path=f"<synthetic {self.motion}>", skeleton=self.skeleton,
+            hand=self.hand, fps=self.fps, subject=subject, units=self.units,
+            camera=Camera(**self.camera), bone_lengths=dict(self.bone_lengths),
+            image_width=self.image_size[0], image_height=self.image_size[1],
+            raw=json.dumps(sidecar, sort_keys=True),
+        )
+        digest = hashlib.sha256(self.uv.tobytes() + self.xyz.tobytes()).hexdigest()
+        return Clip(spec=spec, skeleton=load_skeleton(self.skeleton), uv=self.uv.copy(),
+                    confidence=np.ones(self.uv.shape[:2]), truth=self.xyz.copy(),
+                    source_format="synthetic", source_files=(), content_hash=digest)
 
     def truth_table(self, clip_id: str) -> pa.Table:
         """Return this clip's ``truth_3d`` table: one row a frame and joint."""

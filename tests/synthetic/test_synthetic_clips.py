@@ -89,6 +89,17 @@ def test_sidecar_reads_back_as_a_valid_clip_spec(tmp_path):
     assert (spec.image_width, spec.image_height) == clip.image_size
 
 
+def test_as_clip_gives_a_fully_observed_clip_with_truth():
+    synthetic = synthesize_clip("rapid", 40, camera="pinhole", seed=4, hand="left")
+    clip = synthetic.as_clip("rapid_left")
+    assert clip.clip_id == "rapid_left" and clip.n_frames == 40
+    assert clip.spec.hand == "left" and clip.spec.camera.model == "pinhole"
+    assert clip.observed.all()
+    np.testing.assert_array_equal(clip.uv, synthetic.uv)
+    np.testing.assert_array_equal(clip.truth, synthetic.xyz)
+    assert clip.skeleton.joints == synthetic.joints
+
+
 def test_truth_table_follows_the_truth_3d_contract():
     clip = synthesize_clip("clench", 12, skeleton="dhg22")
     table = clip.truth_table("c1")
