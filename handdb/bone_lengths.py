@@ -231,8 +231,8 @@ def clip_bone_lengths(clip: Clip, ratios: pa.Table | None = None, *,
     clip
         The clip: its sidecar's ``bone_lengths``, its ``truth`` and its 2D tracks.
     ratios
-        Table ``joint_ratios`` (cohort ``all`` is used); ``None`` uses the paper's
-        Table 1.
+        Table ``joint_ratios`` (cohort ``all`` is used); ``None`` or an empty table uses
+        the paper's Table 1.
     markers
         ``(T, J, 3) float64`` 3D marker positions of the clip in its units, NaN where
         missing, or ``None``.
@@ -249,7 +249,8 @@ def clip_bone_lengths(clip: Clip, ratios: pa.Table | None = None, *,
         some bone can be had from no source; the message names the bones and the fix.
     """
     skeleton, spec = clip.skeleton, clip.spec
-    ratios = joint_ratios(table1_measurements()) if ratios is None else ratios
+    if ratios is None or ratios.num_rows == 0:
+        ratios = joint_ratios(table1_measurements())
     ledger = _Ledger(skeleton)
 
     given = np.array([spec.bone_lengths.get(j, np.nan) for j in skeleton.joints])

@@ -202,7 +202,7 @@ def read_xray(path: str | Path) -> tuple[pa.Table, list[InputError]]:
     -------
     measurements
         Table ``xray_measurements``: one row per segment of every complete
-        (image, finger), ``length`` in the file's unit.
+        (image, finger), ``length`` in the file's unit, ``source_file`` the file's name.
     refused
         One :class:`InputError` per refused row and per quarantined (image, finger),
         each naming the file, the 1-based line and the field.
@@ -227,7 +227,7 @@ def read_xray(path: str | Path) -> tuple[pa.Table, list[InputError]]:
     rows, group_errors = _complete_groups(rows, refused, file)
     rows, image_errors = _consistent_images(rows, file)
     columns: dict[str, list] = {
-        "source_file": [file] * len(rows),
+        "source_file": [Path(file).name] * len(rows),
         "line": [r.line for r in rows],
         "image_id": [r.image_id for r in rows],
         "finger": [r.finger for r in rows],

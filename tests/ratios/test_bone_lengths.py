@@ -13,7 +13,7 @@ from handdb.bone_lengths import (
 from handdb.errors import BoneLengthError
 from handdb.ratios import bone_ratios, joint_ratios, table1_measurements
 from handdb.skeletons import load_skeleton
-from handdb.tables import schema
+from handdb.tables import empty, schema
 
 #: Curl per frame (radians); frame 3 shows the flat, stretched hand.
 CURL = np.array([0.9, 0.6, 0.3, 0.0, 0.4, 1.2])
@@ -135,3 +135,10 @@ def test_buchholz_middle_finger_spans_the_hand():
     chain = load_skeleton("mediapipe21").finger_chain("middle")
     assert proportions[chain].sum() == pytest.approx(1.0)
     assert proportions[chain[1]] == middle[1]
+
+
+def test_empty_ratio_table_falls_back_to_table1(make_clip):
+    clip = make_clip(CURL, bone_lengths={"index_pip": 49.0}, hidden=("ring_tip",))
+    result = clip_bone_lengths(clip, empty("joint_ratios"))
+    assert result.sources[clip.skeleton.index("ring_tip")] == "ratios"
+    assert result.lengths == pytest.approx(clip_bone_lengths(clip).lengths, nan_ok=True)

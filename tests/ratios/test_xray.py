@@ -27,7 +27,7 @@ def test_reads_complete_images_with_metadata(tmp_path):
     rows = table.to_pylist()
     assert {r["finger"] for r in rows} == {"index", "thumb"}
     assert rows[0]["sex"] == "f" and rows[0]["age"] == 34.0 and rows[0]["side"] == "right"
-    assert rows[0]["line"] >= 2
+    assert rows[0]["line"] >= 2 and rows[0]["source_file"] == "hands.xray.csv"
 
 
 def test_missing_segment_quarantines_only_that_finger(tmp_path):
