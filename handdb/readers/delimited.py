@@ -8,7 +8,6 @@ quoted but may not contain the delimiter or a line break.
 
 from __future__ import annotations
 
-import io
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -20,15 +19,16 @@ import pyarrow.csv as pacsv
 from handdb.errors import InputError
 
 #: A decimal number: optional sign, digits with an optional fraction, optional exponent.
+#: Cells are parsed by pyarrow; the pattern finds the cell that pyarrow refused.
 NUMBER_PATTERN = r"^[-+]?(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?$"
 
 #: A whole number written without fraction or exponent.
-INTEGER_PATTERN = r"^[-+]?\d+$"
-
-#: Spellings of NaN and infinity that float parsers accept but inputs may not use.
-NON_FINITE_PATTERN = r"(?i)^[-+]?(nan|inf|infinity)$"
+INTEGER_PATTERN = r"^-?\d+$"
 
 _NEWLINE, _CARRIAGE_RETURN = ord("\n"), ord("\r")
+
+#: A delimiter no text line holds, to read each line as one cell.
+_UNUSED_DELIMITER = "\x1f"
 
 
 def read_bytes(path: Path) -> bytes:
@@ -65,9 +65,9 @@ class TextLines:
 
     def count(self, data: bytes, byte: str) -> np.ndarray:
         """How often ``byte`` occurs on each line, ``(L,) int64``."""
-        hits = np.frombuffer(data, dtype=np.uint8) == ord(byte)
-        cumulative = np.concatenate([[0], np.cumsum(hits)])
-        return cumulative[self.end] - cumulative[self.start]
+        hits = np.flatnonzero(np.frombuffer(data, dtype=np.uint8) == ord(byte))
+        line = np.searchsorted(self.start, hits, side="right") - 1
+        return np.bincount(line, minlength=self.start.size)
 
 
 @dataclass(frozen=True)
@@ -97,6 +97,17 @@ class DelimitedTable:
         """Return an :class:`InputError` at data row ``row``, column ``column``."""
         return InputError(self.path, reason, line=int(self.line[row]), field=column)
 
+    def _first_mismatch(self, column: str, pattern: str, skip_empty: bool) -> int:
+        """Row of the first cell of ``column`` not matching ``pattern``."""
+        cells = self.columns[column]
+        fine = pc.match_substring_regex(cells, pattern)
+        if skip_empty:
+            fine = pc.or_(fine, pc.equal(cells, ""))
+        bad = np.flatnonzero(~fine.to_numpy(zero_copy_only=False))
+        if not bad.size:
+            raise self.error(0, column, "holds a value that cannot be parsed")
+        return int(bad[0])
+
     def numbers(self, column: str, *, allow_empty: bool) -> np.ndarray:
         """Parse ``column`` as decimal numbers, ``(N,) float64`` with NaN for empty cells.
 
@@ -108,33 +119,32 @@ class DelimitedTable:
         """
         cells = self.columns[column]
         empty = pc.equal(cells, "")
-        number = pc.match_substring_regex(cells, NUMBER_PATTERN)
-        bad = np.flatnonzero(~(number.to_numpy(zero_copy_only=False)
-                               | empty.to_numpy(zero_copy_only=False)))
-        if bad.size:
-            row = int(bad[0])
-            text = cells[row].as_py()
-            if pc.match_substring_regex(pa.array([text]), NON_FINITE_PATTERN)[0].as_py():
-                reason = (f"'{text}' is not a finite number; leave the cell empty for a "
-                          "missing point")
-            else:
-                reason = f"'{text}' is not a number"
-            raise self.error(row, column, reason)
-        if not allow_empty and pc.any(empty).as_py():
-            row = int(np.flatnonzero(empty.to_numpy(zero_copy_only=False))[0])
+        try:
+            values = pc.cast(pc.if_else(empty, None, cells), pa.float64())
+        except pa.ArrowInvalid:
+            row = self._first_mismatch(column, NUMBER_PATTERN, skip_empty=True)
+            raise self.error(row, column, f"'{cells[row].as_py()}' is not a number") from None
+        values = values.to_numpy(zero_copy_only=False)
+        is_empty = empty.to_numpy(zero_copy_only=False)
+        non_finite = np.flatnonzero(~np.isfinite(values) & ~is_empty)
+        if non_finite.size:
+            row = int(non_finite[0])
+            raise self.error(row, column, f"'{cells[row].as_py()}' is not a finite number; "
+                             "leave the cell empty for a missing point")
+        if not allow_empty and is_empty.any():
+            row = int(np.flatnonzero(is_empty)[0])
             raise self.error(row, column, "is empty; a value is required")
-        values = pc.cast(pc.if_else(empty, None, cells), pa.float64())
-        return values.to_numpy(zero_copy_only=False)
+        return values
 
     def frames(self, column: str) -> np.ndarray:
         """Parse ``column`` as frame numbers (whole, from 0), ``(N,) int64``."""
         cells = self.columns[column]
-        whole = pc.match_substring_regex(cells, INTEGER_PATTERN).to_numpy(zero_copy_only=False)
-        if not whole.all():
-            row = int(np.flatnonzero(~whole)[0])
+        try:
+            frame = pc.cast(cells, pa.int64()).to_numpy(zero_copy_only=False)
+        except pa.ArrowInvalid:
+            row = self._first_mismatch(column, INTEGER_PATTERN, skip_empty=False)
             raise self.error(row, column, f"'{cells[row].as_py()}' is not a whole frame "
-                             "number; frames count 0, 1, 2, ...")
-        frame = pc.cast(cells, pa.int64()).to_numpy(zero_copy_only=False)
+                             "number; frames count 0, 1, 2, ...") from None
         negative = np.flatnonzero(frame < 0)
         if negative.size:
             row = int(negative[0])
@@ -196,7 +206,7 @@ def read_delimited(path: Path, data: bytes, *, names: list[str], header_lines: i
     first_data = int(lines.start[data_lines[0] - 1])
     try:
         table = pacsv.read_csv(
-            io.BytesIO(data[first_data:]),
+            pa.BufferReader(pa.py_buffer(data).slice(first_data)),
             read_options=pacsv.ReadOptions(column_names=names),
             parse_options=pacsv.ParseOptions(delimiter=delimiter),
             convert_options=pacsv.ConvertOptions(
@@ -208,6 +218,45 @@ def read_delimited(path: Path, data: bytes, *, names: list[str], header_lines: i
     columns = {name: pc.utf8_trim_whitespace(table.column(name).combine_chunks())
                for name in names}
     return DelimitedTable(path=path, columns=columns, line=data_lines.astype(np.int64))
+
+
+def read_whitespace_separated(path: Path, data: bytes, *, names: list[str]) -> DelimitedTable:
+    """Parse ``data`` (the bytes of ``path``) as fields separated by runs of blanks.
+
+    Blank lines and blanks at the ends of lines are ignored; every other line must have
+    exactly ``len(names)`` fields.
+
+    Raises
+    ------
+    InputError
+        At the first line with too few or too many fields (a truncated file), or for
+        text that is not UTF-8.
+    """
+    try:
+        table = pacsv.read_csv(
+            pa.BufferReader(pa.py_buffer(data)),
+            read_options=pacsv.ReadOptions(column_names=["text"]),
+            parse_options=pacsv.ParseOptions(delimiter=_UNUSED_DELIMITER, quote_char=False),
+            convert_options=pacsv.ConvertOptions(column_types={"text": pa.string()},
+                                                 strings_can_be_null=False),
+        )
+    except pa.ArrowInvalid as exc:
+        raise InputError(path, f"cannot be parsed: {exc}") from None
+    text = pc.utf8_trim_whitespace(table.column("text").combine_chunks())
+    filled = pc.not_equal(text, "")
+    text = text.filter(filled)
+    line = TextLines.of(data).nonblank[filled.to_numpy(zero_copy_only=False)]
+    fields = pc.ascii_split_whitespace(text)
+    counts = pc.list_value_length(fields).to_numpy(zero_copy_only=False)
+    wrong = np.flatnonzero(counts != len(names))
+    if wrong.size:
+        row = int(wrong[0])
+        raise InputError(
+            path, f"has {counts[row]} fields, expected {len(names)} ({' '.join(names)})"
+            + ("; the file looks truncated" if row == counts.size - 1 else ""),
+            line=int(line[row]))
+    columns = {name: pc.list_element(fields, k) for k, name in enumerate(names)}
+    return DelimitedTable(path=path, columns=columns, line=line.astype(np.int64))
 
 
 def write_csv(path: str | Path, columns: dict[str, pa.Array],

@@ -95,7 +95,7 @@ def _joints(path: Path, bodyparts: list[str], line: int, spec: ClipSpec,
         if joint < 0:
             raise unknown_joint(str(path), bodypart, spec, skeleton, line=line,
                                 field="bodyparts")
-    taken = {}
+    taken: dict[int, str] = {}
     for bodypart, joint in zip(bodyparts, joints, strict=True):
         if joint in taken:
             raise InputError(path, f"body parts '{taken[joint]}' and '{bodypart}' both map to "
@@ -182,12 +182,13 @@ def write(path: str | Path, uv: np.ndarray, confidence: np.ndarray | None,
         If given, an ``individuals`` header row naming this one individual.
     """
     names = [(bodyparts or {}).get(joint, joint) for joint in skeleton.joints]
-    coords = COORDS if confidence is not None else COORDS[:2]
-    values = {"x": uv[..., 0], "y": uv[..., 1], "likelihood": confidence}
+    values = {"x": uv[..., 0], "y": uv[..., 1]}
+    if confidence is not None:
+        values["likelihood"] = confidence
     columns = {"frame": pa.array(np.arange(uv.shape[0]), pa.int64())}
     header_cells = []
     for j, name in enumerate(names):
-        for coord in coords:
+        for coord in values:
             columns[f"{name}.{coord}"] = pa.array(values[coord][:, j], from_pandas=True)
             header_cells.append((name, coord))
     header = [["scorer"] + [scorer] * len(header_cells)]

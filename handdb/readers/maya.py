@@ -11,7 +11,6 @@ point, in the sidecar's units, without confidence.
 
 from __future__ import annotations
 
-import re
 from pathlib import Path
 
 import numpy as np
@@ -19,7 +18,12 @@ import pyarrow as pa
 
 from handdb.clip import ClipSpec
 from handdb.errors import InputError
-from handdb.readers.delimited import DelimitedTable, read_bytes, read_delimited, write_csv
+from handdb.readers.delimited import (
+    DelimitedTable,
+    read_bytes,
+    read_whitespace_separated,
+    write_csv,
+)
 from handdb.readers.observations import Observations, Positions, single_file_rows
 from handdb.readers.registry import InputFormat
 from handdb.skeletons import Skeleton
@@ -33,11 +37,6 @@ MAYA_TO_CAMERA = np.array([1.0, -1.0, -1.0])
 COLUMNS = ("joint", "frame", "x", "y", "z")
 
 
-def _single_spaced(data: bytes) -> bytes:
-    """Collapse runs of blanks to one space and trim each line, keeping line breaks."""
-    spaced = re.sub(rb"[ \t]+", b" ", data)
-    return re.sub(rb"(?m)^ | (?=\r?$)", b"", spaced)
-
 
 def _parse(path: Path, spec: ClipSpec, skeleton: Skeleton,
            ) -> tuple[DelimitedTable, np.ndarray, np.ndarray, np.ndarray]:
@@ -46,8 +45,7 @@ def _parse(path: Path, spec: ClipSpec, skeleton: Skeleton,
         raise InputError(spec.path, f"a Maya export numbers the feature points of "
                          f"'{SKELETON}'; set the sidecar's skeleton to it",
                          field="skeleton", clip_id=spec.clip_id)
-    table = read_delimited(path, _single_spaced(read_bytes(path)), names=list(COLUMNS),
-                           header_lines=0, delimiter=" ")
+    table = read_whitespace_separated(path, read_bytes(path), names=list(COLUMNS))
     tokens, codes = table.dictionary("joint")
     by_id = {f"j{point_id}": k for k, point_id in enumerate(skeleton.ids)}
     indices = np.array([by_id.get(token, -1) for token in tokens], dtype=np.int64)

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
+from pathlib import Path
 
 import numpy as np
 
@@ -209,6 +210,6 @@ class Positions(_Rows):
                              "(leave out the row of a joint without ground truth)")
 
 
-def single_file_rows(path: str, n: int) -> tuple[np.ndarray, tuple[str, ...]]:
+def single_file_rows(path: str | Path, n: int) -> tuple[np.ndarray, tuple[str, ...]]:
     """``source`` and ``files`` for rows that all come from the one file ``path``."""
     return np.zeros(n, dtype=np.int64), (str(path),)

@@ -48,7 +48,7 @@ def test_joint_map_names_and_blank_lines_keep_line_numbers(tmp_path, spec_for, m
     ("frame,joint,u,v\n0,wrist,1,2\n1,wrist,abc,2\n", 3, "u", "'abc' is not a number"),
     ("frame,joint,u,v\n0,wrist,1,NaN\n", 2, "v", "'NaN' is not a finite number"),
     ("frame,joint,u,v\n0,wrist,-inf,2\n", 2, "u", "'-inf' is not a finite number"),
-    ("frame,joint,u,v\n0,wrist,1e999,2\n", 2, "u", "inf is not a finite number"),
+    ("frame,joint,u,v\n0,wrist,1e999,2\n", 2, "u", "'1e999' is not a finite number"),
     ("frame,joint,u,v\n0,wrist,1,2\n-1,wrist,1,2\n", 3, "frame", "frame -1 is negative"),
     ("frame,joint,u,v\n0.5,wrist,1,2\n", 2, "frame", "'0.5' is not a whole frame number"),
     ("frame,joint,u,v\n0,wrist,1,\n", 2, "v", "is empty but its partner"),
