@@ -2,7 +2,8 @@
 
 The hand frame
 --------------
-Every hand is built as a *right* hand in a right-handed frame with its origin at the wrist:
+Every hand is built as a *right* hand in a right-handed frame with its origin at the
+skeleton's root joint (the wrist; the palm fold for ``thesis21``):
 
 * ``x`` points to the radial (thumb) side,
 * ``y`` points from the wrist to the middle-finger MCP (distal),
@@ -19,8 +20,9 @@ Where the numbers come from
   Goldstein (1992), *Ergonomics* 35(3) (:data:`handdb.anthropometry.BUCHHOLZ_1992`).
 * The split of a finger's length among its phalanges follows the X-ray measurements of
   Chaudhry, You, Jin & Zhang (seed document ``002``, Table 1, shipped as
-  :func:`handdb.ratios.table1_measurements`): the relative length of each phalanx, its
-  mean, standard deviation, minimum and maximum over the five hands.
+  :func:`handdb.ratios.table1_measurements`): the average hand has the mean relative
+  length of each phalanx over the five X-ray hands, a sampled subject a random mixture
+  of the five.
 * The layout of the carpometacarpal joints and the resting splay of the rays are
   hand-chosen to reproduce typical MCP spacing (about 18 mm for a 185 mm hand) and the
   MCP arc (middle highest, little lowest).
@@ -41,6 +43,7 @@ from handdb.skeletons import FINGERS, Skeleton, load_skeleton
 
 #: Hand length (wrist crease to middle fingertip) of an average adult, mm.
 DEFAULT_HAND_LENGTH_MM = 185.0
+
 
 @cache
 def xray_ratios(finger: str) -> np.ndarray:
@@ -85,9 +88,9 @@ FINGER_ANGLE_DEG: dict[str, float] = {
 #: pronated relative to the fingers, so it curls across the palm, not straight up.
 THUMB_PRONATION_DEG = 60.0
 
-#: Where joints that are not bone ends sit, as a fraction of the wrist -> middle-MCP
-#: segment: the palm centre of ``dhg22`` (DHG's sensor puts it about half way) and the
-#: palm fold of ``thesis21`` (its Maya hand puts it about two thirds of the way).
+#: Joints inside the palm, as a fraction of the way from the wrist to the middle MCP:
+#: the palm centre of ``dhg22`` (DHG's sensor puts it about half way) and the palm fold
+#: of ``thesis21`` (its Maya hand puts it about two thirds of the way).
 PALM_CENTER_FRACTION = 0.5
 PALM_FOLD_FRACTION = 2.0 / 3.0
 

@@ -2,8 +2,9 @@
 
 A :class:`Motion` holds, for ``T`` frames, the joint angles of :mod:`.kinematics`, the
 rotation of the hand relative to the camera and the displacement of the root from its home
-position. Every motion starts from the palm facing the camera with the fingers up
-(:data:`~handdb.synthetic.kinematics.PALM_TO_CAMERA`) and stays within the joint limits.
+position. Wrist rotations turn the hand away from the palm facing the camera with the
+fingers up (:data:`~handdb.synthetic.kinematics.PALM_TO_CAMERA`); every motion stays
+within the joint limits.
 
 Key poses are interpolated with monotone cubic (PCHIP) splines, which never overshoot
 their key values, so a trajectory between poses within the limits stays within them.
@@ -86,16 +87,17 @@ def _fingers(mcp: float, curl: float, **thumb: float) -> np.ndarray:
     return pose(**spec, **thumb)
 
 
-#: Key poses of everyday gestures, radians.
+#: Key poses of everyday gestures, radians. In ``PINCH`` the thumb and index tips of the
+#: average hand come within about 12 mm, pad to pad.
 OPEN = pose(thumb_cmc_abduction=10.0)
 FIST = _fingers(80.0, 95.0, thumb_cmc_flexion=35.0, thumb_cmc_abduction=35.0,
                 thumb_mcp_flexion=45.0, thumb_ip_flexion=50.0)
 SPREAD = pose(index_mcp_abduction=15.0, ring_mcp_abduction=12.0, little_mcp_abduction=25.0,
               thumb_cmc_flexion=-10.0, thumb_cmc_abduction=40.0)
-PINCH = pose(index_mcp_flexion=40.0, index_curl=50.0, middle_mcp_flexion=20.0,
+PINCH = pose(index_mcp_flexion=50.0, index_curl=50.0, middle_mcp_flexion=20.0,
              middle_curl=30.0, ring_mcp_flexion=20.0, ring_curl=30.0, little_mcp_flexion=20.0,
              little_curl=30.0, thumb_cmc_flexion=30.0, thumb_cmc_abduction=45.0,
-             thumb_mcp_flexion=20.0, thumb_ip_flexion=20.0)
+             thumb_mcp_flexion=20.0, thumb_ip_flexion=30.0)
 POINT = FIST.copy()
 POINT[[ANGLE_INDEX[f"index_{d}"] for d in ("mcp_flexion", "pip_flexion", "dip_flexion")]] = 0.0
 GESTURES: dict[str, np.ndarray] = {

@@ -3,8 +3,14 @@
 import numpy as np
 import pytest
 
-from handdb.synthetic.kinematics import ANGLE_INDEX, ANGLE_LIMITS, PALM_TO_CAMERA
-from handdb.synthetic.motions import FIST, MOTIONS, OPEN, make_motion
+from handdb.synthetic.hand_model import make_hand
+from handdb.synthetic.kinematics import (
+    ANGLE_INDEX,
+    ANGLE_LIMITS,
+    PALM_TO_CAMERA,
+    local_kinematics,
+)
+from handdb.synthetic.motions import FIST, MOTIONS, OPEN, PINCH, make_motion
 
 #: Fastest voluntary finger-joint rotation seen in people, deg/s (fast tapping and
 #: flicking reach roughly 1000-2000 deg/s).
@@ -84,6 +90,16 @@ def test_rapid_gestures_are_fast_and_turn_the_wrist_up_to_about_40_degrees():
             > 5 * angular_speed_deg_s(clench.angles, 30.0).max())
     turn = wrist_angle_deg(rapid.root_rotation)
     assert 20.0 < turn.max() < 55.0
+
+
+@pytest.mark.parametrize("seed", [None, 1, 2, 3])
+def test_pinch_brings_the_thumb_and_index_tips_together(seed):
+    model = make_hand(seed=seed)
+    thumb, index = model.skeleton.indices(["thumb_tip", "index_tip"])
+    open_hand, pinch = local_kinematics(model, np.stack([OPEN, PINCH]))
+    # Joint centres of two touching finger pads are one to two pad thicknesses apart.
+    assert np.linalg.norm(pinch[thumb] - pinch[index]) < 25.0
+    assert np.linalg.norm(open_hand[thumb] - open_hand[index]) > 60.0
 
 
 def test_wave_swings_the_open_hand():
