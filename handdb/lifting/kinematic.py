@@ -165,8 +165,12 @@ def finger_log_likelihood(xy: np.ndarray, abs_dz: np.ndarray, palm_z: np.ndarray
 
     Returns
     -------
-    numpy.ndarray
-        ``(T, 2, F, 8) float64``; 0 where a finger's bones have no image points.
+    anatomy
+        ``(T, 2, F, 8) float64``: ranges of motion and DIP-PIP coupling; 0 where a
+        finger's bones have no image points.
+    comfort
+        ``(T, 2, F, 8) float64``: the weak prior toward relaxed poses. It breaks ties but
+        is no evidence about the clip-wide mirror, which is judged on ``anatomy`` alone.
     """
     points = np.concatenate([np.broadcast_to(xy[:, None], palm_z.shape + (2,)),
                              palm_z[..., None]], axis=-1)                # (T, 2, J, 3)
@@ -195,8 +199,7 @@ def finger_log_likelihood(xy: np.ndarray, abs_dz: np.ndarray, palm_z: np.ndarray
     coupling = (theta[..., 2] - DIP_PIP_RATIO * theta[..., 1]) / np.radians(COUPLING_SIGMA_DEG)
     cost = cost + np.where(layout.is_thumb[:, None], 0.0, coupling**2)
     comfort = (theta - np.radians(COMFORT_CENTRE_DEG)) / np.radians(COMFORT_SIGMA_DEG)
-    cost = cost + np.sum(comfort**2, axis=-1)
-    return np.nan_to_num(-0.5 * cost)
+    return np.nan_to_num(-0.5 * cost), np.nan_to_num(-0.5 * np.sum(comfort**2, axis=-1))
 
 
 def bone_log_odds(log_likelihood: np.ndarray) -> np.ndarray:
@@ -248,7 +251,8 @@ def resolve_signs(xy: np.ndarray, abs_dz: np.ndarray, bone_lengths: np.ndarray,
     palm_dz[:, layout.palm_bones] = palm * abs_dz[:, layout.palm_bones]
     palm_z0 = accumulate_depths(palm_dz, skeleton)
     palm_z = np.stack([palm_z0, -palm_z0], axis=1)
-    log_lik = finger_log_likelihood(xy, abs_dz, palm_z, skeleton, layout, hand)
+    anatomy, comfort = finger_log_likelihood(xy, abs_dz, palm_z, skeleton, layout, hand)
+    log_lik = anatomy + comfort
 
     evidence = logsumexp(log_lik, axis=-1).sum(axis=-1)                 # (T, 2)
     tilt = np.sqrt(np.nanmean(abs_dz[:, layout.palm_bones] ** 2, axis=1, keepdims=True))
@@ -265,9 +269,10 @@ def resolve_signs(xy: np.ndarray, abs_dz: np.ndarray, bone_lengths: np.ndarray,
 
     index = _state_index(finger_signs)[:, None, :, None]                # (T, 1, F, 1)
     mirror_state = 1 - state
-    own = np.take_along_axis(chosen, index[:, 0], axis=-1)
+    own = np.take_along_axis(np.take_along_axis(
+        anatomy, state[:, None, None, None], axis=1)[:, 0], index[:, 0], axis=-1)
     mirror = np.take_along_axis(np.take_along_axis(
-        log_lik, mirror_state[:, None, None, None], axis=1)[:, 0],
+        anatomy, mirror_state[:, None, None, None], axis=1)[:, 0],
         len(SIGN_STATES) - 1 - index[:, 0], axis=-1)
     mirror_log_odds = float(np.sum(own - mirror))
     palm_sign = 1.0 - 2.0 * state
@@ -303,8 +308,8 @@ def lift_kinematic(uv: np.ndarray, skeleton: Skeleton, bone_lengths: np.ndarray,
             f"{np.exp(mirror_log_odds):.3g} times as likely as all of them flipped"
             if ambiguous else "")
     if camera.model == "pinhole":
-        xyz, inconsistency = lift_perspective(uv, skeleton, bone_lengths, camera, signs,
-                                              scale)
+        xyz, inconsistency = lift_perspective(uv, skeleton, bone_lengths, camera,
+                                              signs * abs_dz, scale)
         scale = np.full(scale.shape, np.nan)
     else:
         xyz = orthographic_points(image, scale, accumulate_depths(signs * abs_dz, skeleton))

@@ -3,8 +3,9 @@
 Through a pinhole camera a joint lies on the ray ``Z · r`` with
 ``r = ((u − cx) / fx, (v − cy) / fy, 1)``. Given its parent's position ``P`` and the bone
 length ``l``, ``|Z r − P| = l`` is a quadratic in ``Z`` whose two roots are the near and far
-solutions (the reflective ambiguity, now asymmetric); the sign of each bone chooses the
-root. A negative discriminant (the ray passes farther than ``l`` from ``P``) is clamped: the
+solutions (the reflective ambiguity, now asymmetric). Each bone takes the root nearer the depth its orthographic lift gave it (relative to
+its parent); a sign alone does not do, as the parent is seldom on the child's ray. A
+negative discriminant (the ray passes farther than ``l`` from ``P``) is clamped: the
 joint goes to the ray's point nearest ``P`` and the excess distance is recorded.
 
 The root's depth is the largest for which every bone has a real solution (the perspective
@@ -38,7 +39,7 @@ def camera_rays(uv: np.ndarray, camera: Camera) -> np.ndarray:
 
 
 def walk_rays(rays: np.ndarray, root_depth: np.ndarray, skeleton: Skeleton,
-              bone_lengths: np.ndarray, signs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+              bone_lengths: np.ndarray, bone_dz: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Place every joint on its ray, from the root to the tips.
 
     Parameters
@@ -49,8 +50,9 @@ def walk_rays(rays: np.ndarray, root_depth: np.ndarray, skeleton: Skeleton,
         ``(T,) float64``, clip units: depth ``Z`` of the root.
     bone_lengths
         ``(J,) float64``, clip units.
-    signs
-        ``(T, J) float64``: +1 takes the far root of each bone's quadratic, -1 the near one.
+    bone_dz
+        ``(T, J) float64``, clip units: each bone's depth relative to its parent as first
+        estimated; the root of the bone's quadratic nearer to it is taken.
 
     Returns
     -------
@@ -74,13 +76,15 @@ def walk_rays(rays: np.ndarray, root_depth: np.ndarray, skeleton: Skeleton,
         miss_sq = np.clip(np.sum(origin * origin, axis=-1) - b * nearest, 0.0, None)
         length = bone_lengths[joint]
         half_chord = np.sqrt(np.clip(length**2 - miss_sq, 0.0, None) / a)
-        xyz[:, joint] = ray * (nearest + signs[:, joint] * half_chord)[:, None]
+        wanted = origin[:, 2] + bone_dz[:, joint]
+        side = np.where(wanted >= nearest, 1.0, -1.0)
+        xyz[:, joint] = ray * (nearest + side * half_chord)[:, None]
         inconsistency[:, joint] = np.clip(np.sqrt(miss_sq) - length, 0.0, None)
     return xyz, inconsistency
 
 
 def deepest_feasible_root(rays: np.ndarray, guess: np.ndarray, skeleton: Skeleton,
-                          bone_lengths: np.ndarray, signs: np.ndarray) -> np.ndarray:
+                          bone_lengths: np.ndarray, bone_dz: np.ndarray) -> np.ndarray:
     """Largest root depth per frame at which every bone has a real solution.
 
     Parameters
@@ -99,7 +103,7 @@ def deepest_feasible_root(rays: np.ndarray, guess: np.ndarray, skeleton: Skeleto
     tolerance = FEASIBLE_TOLERANCE * np.nanmax(bone_lengths)
     for _ in range(BISECTION_STEPS):
         middle = 0.5 * (low + high)
-        _, excess = walk_rays(rays, np.exp(middle), skeleton, bone_lengths, signs)
+        _, excess = walk_rays(rays, np.exp(middle), skeleton, bone_lengths, bone_dz)
         feasible = np.nanmax(excess, axis=1) <= tolerance
         low = np.where(feasible, middle, low)
         high = np.where(feasible, high, middle)
@@ -107,7 +111,7 @@ def deepest_feasible_root(rays: np.ndarray, guess: np.ndarray, skeleton: Skeleto
 
 
 def lift_perspective(uv: np.ndarray, skeleton: Skeleton, bone_lengths: np.ndarray,
-                     camera: Camera, signs: np.ndarray,
+                     camera: Camera, bone_dz: np.ndarray,
                      weak_scale: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Lift a pinhole clip whose bone signs are known.
 
@@ -115,8 +119,9 @@ def lift_perspective(uv: np.ndarray, skeleton: Skeleton, bone_lengths: np.ndarra
     ----------
     uv
         ``(T, J, 2) float64``, pixels.
-    signs
-        ``(T, J) float64`` of ±1 (+: the child is farther from the camera).
+    bone_dz
+        ``(T, J) float64``, clip units: signed depth of each bone from the weak-perspective
+        lift (see :func:`walk_rays`).
     weak_scale
         ``(T,) float64``, pixels per clip unit, of the weak-perspective view: the root's
         depth is first guessed as ``focal / weak_scale``.
@@ -128,6 +133,6 @@ def lift_perspective(uv: np.ndarray, skeleton: Skeleton, bone_lengths: np.ndarra
     """
     rays = camera_rays(uv, camera)
     focal = 0.5 * (camera.fx + camera.fy)
-    bound = deepest_feasible_root(rays, focal / weak_scale, skeleton, bone_lengths, signs)
+    bound = deepest_feasible_root(rays, focal / weak_scale, skeleton, bone_lengths, bone_dz)
     root_depth = 1.0 / smooth_scale(1.0 / bound)
-    return walk_rays(rays, root_depth, skeleton, bone_lengths, signs)
+    return walk_rays(rays, root_depth, skeleton, bone_lengths, bone_dz)
