@@ -13,7 +13,9 @@ positions alone do not fix; here it is fixed so that hinges stay hinges:
   the normal of the finger's flexion plane (the plane through its MCP, the joints after
   it and its tip), signed to agree with the palm's reference axis for that finger. When
   the finger is nearly straight the plane is undefined and the axis blends into the
-  reference axis ``d x Z_palm`` (``d`` the finger's base bone, which is fixed in the palm).
+  reference axis. A finger's reference axis is ``d x Z_palm`` (``d`` its base bone, fixed
+  in the palm): across the palm. The thumb's is the palm normal ``Z_palm``: its nail faces
+  sideways in a flat hand, so it bends across the palm, about an axis near the normal.
   Because PIP, DIP and IP frames share the plane normal as ``+X``, a finger bending in
   its plane turns those joints about their local ``X`` only: no twist, no spin.
 * A leaf joint (a fingertip) keeps its parent's orientation.
@@ -191,7 +193,8 @@ def _finger_hinge_axes(
             continue
         base_parent = skeleton.parents[chain[0]]
         base_bone = xyz[:, chain[0]] - xyz[:, base_parent]
-        reference = _unit(np.cross(base_bone, palm_normal))
+        reference = (palm_normal if finger == "thumb"
+                     else _unit(np.cross(base_bone, palm_normal)))
         roles = [skeleton.roles[j] for j in chain]
         plane_joints = chain[roles.index("mcp"):] if "mcp" in roles else chain
         bones = np.diff(xyz[:, plane_joints], axis=1)

@@ -1,9 +1,10 @@
 """Synthetic hand motion with known joint rotations, built without handdb's kinematics.
 
-Each finger bends in one plane: its base bone is fixed in the palm, the finger's plane is
-the palm's rest plane for that finger turned by an abduction angle about the palm normal,
-and every bone of the finger is the previous one turned about the plane's normal by a
-positive flexion angle. Positions come from adding bone vectors; the expected local
+Each finger bends in one plane: its base bone is fixed in the palm; its rest frame has
+the bone as Y and the flexion axis as X (across the palm for a finger, the palm normal for
+the thumb); the finger's plane is that frame turned about its Z by an abduction angle, and
+every bone of the finger is the previous one turned about the plane's X by a positive
+flexion angle. Positions come from adding bone vectors; the expected local
 rotations are written down from the angles.
 """
 
@@ -63,7 +64,11 @@ def make_hinge_motion(skeleton: Skeleton, n_frames: int, seed: int = 0,
         while len(skeleton.children(chain[-1])) == 1:
             chain.append(int(skeleton.children(chain[-1])[0]))
         d = (rest[child] - rest[parent]) / lengths[child]
-        rest_frame = np.stack([np.cross(d, [0, 0, 1.0]), d, [0, 0, 1.0]], axis=-1)
+        normal = np.array([0, 0, 1.0])
+        if skeleton.fingers[child] == "thumb":      # the thumb bends about the palm normal
+            rest_frame = np.stack([normal, d, np.cross(normal, d)], axis=-1)
+        else:
+            rest_frame = np.stack([np.cross(d, normal), d, normal], axis=-1)
         abduction = Rotation.from_rotvec(np.outer(np.sin(6 * t[:, 0] + rng.uniform(0, 6)),
                                                   [0, 0, np.deg2rad(15)])).as_matrix()
         plane = rest_frame @ abduction                                  # (T, 3, 3)

@@ -73,7 +73,7 @@ def test_export_usd_command(database, tmp_path, suffix):
     assert result.exit_code == 0, result.output
     clip = open_skeleton(out)
     assert clip.stage.GetTimeCodesPerSecond() == 60.0
-    stage_xyz = joint_world_positions(clip.skel_query, len(motion.xyz))
+    stage_xyz = joint_world_positions(clip, len(motion.xyz))
     np.testing.assert_allclose(stage_xyz, CAMERA_TO_Y_UP.apply(motion.xyz.reshape(-1, 3))
                                .reshape(motion.xyz.shape), atol=1e-3)
 

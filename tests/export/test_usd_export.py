@@ -27,7 +27,7 @@ def test_usdskel_reproduces_the_joints_at_every_frame(hinge_motion, tmp_path, su
     path = export(hinge_motion, tmp_path / f"clip{suffix}")
     assert path.read_bytes().startswith(MAGIC[suffix])
     clip = open_skeleton(path)
-    stage_xyz = joint_world_positions(clip.skel_query, len(hinge_motion.xyz))
+    stage_xyz = joint_world_positions(clip, len(hinge_motion.xyz))
     camera_xyz = CAMERA_TO_Y_UP.inv().apply(stage_xyz.reshape(-1, 3)).reshape(stage_xyz.shape)
     tolerance = 1e-4 * hinge_motion.bone_lengths[hinge_motion.bone_lengths > 0].min()
     assert np.abs(camera_xyz - hinge_motion.xyz).max() < tolerance
@@ -99,7 +99,7 @@ def test_given_rotations_are_exported(mediapipe_motion, tmp_path):
     path = export(mediapipe_motion, tmp_path / "c.usdc", xyz=mediapipe_motion.xyz[:1],
                   rotations=still)
     clip = open_skeleton(path)
-    np.testing.assert_allclose(joint_world_positions(clip.skel_query, 1)[0],
+    np.testing.assert_allclose(joint_world_positions(clip, 1)[0],
                                CAMERA_TO_Y_UP.apply(rest_positions(skeleton, lengths)), atol=1e-4)
 
 

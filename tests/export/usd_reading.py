@@ -29,10 +29,10 @@ def open_skeleton(path) -> OpenedClip:
     return OpenedClip(stage, cache, cache.GetSkelQuery(skeleton), cache.GetSkinningQuery(mesh))
 
 
-def joint_world_positions(skel_query, n_frames: int) -> np.ndarray:
+def joint_world_positions(clip: OpenedClip, n_frames: int) -> np.ndarray:
     """Joint positions ``(T, J, 3)`` in stage axes from UsdSkel's own forward kinematics."""
     return np.stack([
-        np.array(skel_query.ComputeJointWorldTransforms(UsdGeom.XformCache(frame)))[:, 3, :3]
+        np.array(clip.skel_query.ComputeJointWorldTransforms(UsdGeom.XformCache(frame)))[:, 3, :3]
         for frame in range(n_frames)
     ])
 
