@@ -5,7 +5,8 @@ is the run of digits before ``_keypoints.json``. Each file is
 ``{"people": [{"hand_right_keypoints_2d": [x0, y0, c0, x1, y1, c1, ...], ...}, ...]}``:
 handdb reads the first person's hand on the sidecar's side, 21 points of ``x, y, c``
 (pixels and confidence) in OpenPose's hand order, which is the ``mediapipe21`` order. A
-point ``0, 0, 0`` is missing; a file with no people is a frame with every point missing.
+point ``0, 0, 0`` is missing; a file with no people, or whose first person's hand array
+is empty, is a frame with every point missing.
 Other files in the folder are ignored.
 """
 
@@ -61,7 +62,7 @@ def frame_files(folder: Path) -> list[tuple[int, Path]]:
 def hand_keypoints(path: Path, hand: str) -> np.ndarray | None:
     """Return the first person's hand keypoints in one file, ``(21, 3)`` x, y, c.
 
-    ``None`` when the file has no people.
+    ``None`` when the file has no people or the person's hand array is empty.
     """
     doc = load_json(path)
     people = doc.get("people") if isinstance(doc, dict) else None
@@ -76,7 +77,12 @@ def hand_keypoints(path: Path, hand: str) -> np.ndarray | None:
         raise InputError(path, f"the first person has no {hand} hand keypoints; run OpenPose "
                          "with --hand, or set the sidecar's hand", field=field)
     values = people[0][key]
-    n_values = len(values) if isinstance(values, list) else 0
+    if values == []:
+        return None
+    if not isinstance(values, list):
+        raise InputError(path, f"must be a list of numbers, got {type(values).__name__}",
+                         field=field)
+    n_values = len(values)
     n_points = load_skeleton(HAND_SKELETON).n_joints
     if n_values != n_points * VALUES_PER_POINT:
         raise InputError(path, f"has {n_values} numbers; a hand has {n_points} keypoints of "

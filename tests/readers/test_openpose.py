@@ -42,6 +42,7 @@ def test_frames_come_from_file_names_and_the_sidecar_picks_the_hand(tmp_path, sp
     keypoint_file(folder, 10, [hand(right) | hand(left, "left")])
     keypoint_file(folder, 9, [hand(right) | hand(left, "left")])
     keypoint_file(folder, 11, [])
+    keypoint_file(folder, 8, [hand([]) | hand([], "left")])
     (folder / "notes.txt").write_text("ignored")
     obs = openpose.read(folder, spec_for(tmp_path, hand="left"), mediapipe21)
     assert obs.n_frames == 12
@@ -63,7 +64,7 @@ def test_thesis_skeleton_drops_the_joint_it_lacks(tmp_path, spec_for, mediapipe2
 
 @pytest.mark.parametrize(("people", "field", "message"), [
     ([hand([1.0] * 60)], "people[0].hand_right_keypoints_2d", "has 60 numbers.*63"),
-    ([hand("abc")], "people[0].hand_right_keypoints_2d", "has 0 numbers"),
+    ([hand("abc")], "people[0].hand_right_keypoints_2d", "must be a list of numbers, got str"),
     ([hand([1.0] * 62 + ["x"])], "people[0].hand_right_keypoints_2d", "list of numbers"),
     ([hand([1.0] * 63, "left")], "people[0].hand_right_keypoints_2d", "no right hand"),
     ([hand([float("nan")] + [1.0] * 62)], "people[0].hand_right_keypoints_2d", "NaN"),
