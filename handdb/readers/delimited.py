@@ -160,8 +160,8 @@ class DelimitedTable:
 
 
 def split_header(line: bytes, delimiter: str) -> list[str]:
-    """Cells of one header line, trimmed and unquoted."""
-    text = line.decode("utf-8", errors="replace").strip()
+    """Cells of one header line, trimmed and unquoted (a leading byte-order mark dropped)."""
+    text = line.decode("utf-8-sig", errors="replace").strip()
     return [cell.strip().strip('"').strip() for cell in text.split(delimiter)]
 
 

@@ -34,6 +34,13 @@ def test_empty_coordinates_are_a_missing_point_and_confidence_is_optional(
     assert obs.joint.tolist() == [0, mediapipe21.index("index_tip"), 0]
 
 
+def test_spreadsheet_export_with_byte_order_mark_and_crlf(tmp_path, spec_for, mediapipe21):
+    path = tmp_path / "clip.tracks.csv"
+    path.write_bytes("frame,joint,u,v\r\n0,wrist,1,2\r\n".encode("utf-8-sig"))
+    obs = tracks_csv.read(path, spec_for(tmp_path), mediapipe21)
+    assert obs.uv.tolist() == [[1.0, 2.0]]
+
+
 def test_joint_map_names_and_blank_lines_keep_line_numbers(tmp_path, spec_for, mediapipe21):
     text = "frame,joint,u,v,confidence\n\n0,WRIST,1,2,0.9\r\n\n1,tip8,3,4,1\n"
     _, obs = read_text(tmp_path, spec_for, mediapipe21, text,
