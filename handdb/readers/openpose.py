@@ -6,8 +6,7 @@ is the run of digits before ``_keypoints.json``. Each file is
 handdb reads the first person's hand on the sidecar's side, 21 points of ``x, y, c``
 (pixels and confidence) in OpenPose's hand order, which is the ``mediapipe21`` order. A
 point ``0, 0, 0`` is missing; a file with no people, or whose first person's hand array
-is empty, is a frame with every point missing.
-Other files in the folder are ignored.
+is empty, is a frame with every point missing. Other files in the folder are ignored.
 """
 
 from __future__ import annotations
