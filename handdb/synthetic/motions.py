@@ -232,26 +232,39 @@ RANDOM_KEY_S = (0.4, 0.9)
 RANDOM_RANGE_SHARE = 0.8
 RANDOM_WRIST_DEG = np.array([25.0, 35.0, 15.0])
 RANDOM_ROOT_DRIFT = np.array([0.08, 0.08, 0.04])
+
+#: How far (degrees) a key's DIP flexion may stray from the coupled value, and each
+#: finger's abduction from the shared spread: small enough that neighbouring fingers,
+#: which rest 5-7 deg apart, never cross.
 RANDOM_DIP_SPREAD_DEG = 8.0
+RANDOM_ABDUCTION_JITTER_DEG = {"index": 3.0, "middle": 2.0, "ring": 3.0, "little": 3.0}
 
 
 def random_motion(n_frames: int, fps: float, rng: np.random.Generator) -> Motion:
     """Smooth random motion: key poses drawn within the joint limits every 0.4-0.9 s.
 
-    Each key draws every angle uniformly from the central ``RANDOM_RANGE_SHARE`` of its
-    range, except DIP flexion, which follows the PIP (:data:`DIP_PIP_COUPLING`) within a few
-    degrees; the wrist and the root wander smoothly too.
+    Each key draws every flexion uniformly from the central ``RANDOM_RANGE_SHARE`` of its
+    range; DIP flexion follows the PIP (:data:`DIP_PIP_COUPLING`) within a few degrees.
+    The fingers spread together: one spread in [0, 1] a key opens every finger's
+    abduction toward its upper limit, each within a few degrees, so fingers never cross.
+    The wrist and the root wander smoothly too.
     """
     times = _key_times(rng, n_frames / fps, *RANDOM_KEY_S)
+    n_keys = len(times)
     centre, half = ANGLE_LIMITS.mean(axis=1), np.diff(ANGLE_LIMITS, axis=1)[:, 0] / 2.0
-    keys = centre + RANDOM_RANGE_SHARE * half * rng.uniform(-1.0, 1.0, (len(times), N_ANGLES))
+    keys = centre + RANDOM_RANGE_SHARE * half * rng.uniform(-1.0, 1.0, (n_keys, N_ANGLES))
+    spread = rng.uniform(0.0, 1.0, n_keys)
     for finger in LONG_FINGERS:
         pip, dip = ANGLE_INDEX[f"{finger}_pip_flexion"], ANGLE_INDEX[f"{finger}_dip_flexion"]
-        jitter = np.radians(RANDOM_DIP_SPREAD_DEG) * rng.uniform(-1.0, 1.0, len(times))
+        jitter = np.radians(RANDOM_DIP_SPREAD_DEG) * rng.uniform(-1.0, 1.0, n_keys)
         keys[:, dip] = DIP_PIP_COUPLING * keys[:, pip] + jitter
+        abduction = ANGLE_INDEX[f"{finger}_mcp_abduction"]
+        opening = 0.0 if finger == "middle" else RANDOM_RANGE_SHARE * ANGLE_LIMITS[abduction, 1]
+        wobble = np.radians(RANDOM_ABDUCTION_JITTER_DEG[finger]) * rng.uniform(-1.0, 1.0, n_keys)
+        keys[:, abduction] = spread * opening + wobble
     keys = clip_to_limits(keys)
-    wrist = rng.uniform(-1.0, 1.0, (len(times), 3)) * RANDOM_WRIST_DEG
-    drift = rng.uniform(-1.0, 1.0, (len(times), 3)) * RANDOM_ROOT_DRIFT
+    wrist = rng.uniform(-1.0, 1.0, (n_keys, 3)) * RANDOM_WRIST_DEG
+    drift = rng.uniform(-1.0, 1.0, (n_keys, 3)) * RANDOM_ROOT_DRIFT
     return Motion(
         "random", fps,
         _keyframed(times, keys, n_frames, fps),

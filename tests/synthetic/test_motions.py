@@ -7,6 +7,7 @@ from handdb.synthetic.hand_model import make_hand
 from handdb.synthetic.kinematics import (
     ANGLE_INDEX,
     ANGLE_LIMITS,
+    ANGLE_NAMES,
     PALM_TO_CAMERA,
     local_kinematics,
 )
@@ -110,10 +111,28 @@ def test_wave_swings_the_open_hand():
     assert np.degrees(curl.max()) < 30.0
 
 
+@pytest.mark.parametrize("seed", range(3))
+@pytest.mark.parametrize("name", MOTIONS)
+def test_neighbouring_fingers_never_cross(name, seed):
+    model = make_hand(seed=seed)
+    local = local_kinematics(model, make_motion(name, 300, seed=seed).angles)
+    mcp = model.skeleton.indices([f"{f}_mcp" for f in ("index", "middle", "ring", "little")])
+    pip = model.skeleton.indices([f"{f}_pip" for f in ("index", "middle", "ring", "little")])
+    phalanx = local[:, pip] - local[:, mcp]
+    # Azimuth in the palm plane, from the distal axis toward the thumb side.
+    azimuth = np.degrees(np.arctan2(phalanx[..., 0], phalanx[..., 1]))
+    assert np.all(np.diff(azimuth, axis=1) < 0.0)
+
+
 def test_random_motion_explores_the_range():
     motion = make_motion("random", 900, seed=0)
     span = motion.angles.max(axis=0) - motion.angles.min(axis=0)
-    assert np.all(span > 0.3 * np.diff(ANGLE_LIMITS, axis=1)[:, 0])
+    limits = np.diff(ANGLE_LIMITS, axis=1)[:, 0]
+    flexions = [i for i, name in enumerate(ANGLE_NAMES) if name.endswith("flexion")]
+    assert np.all(span[flexions] > 0.3 * limits[flexions])
+    for finger in ("index", "ring", "little"):
+        abduction = ANGLE_INDEX[f"{finger}_mcp_abduction"]
+        assert motion.angles[:, abduction].max() > 0.5 * ANGLE_LIMITS[abduction, 1]
 
 
 @pytest.mark.parametrize(("args", "message"), [
