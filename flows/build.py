@@ -1,6 +1,7 @@
 """The build flow: inbox → database, one chain of tasks per clip.
 
-Each clip passes ingest → bone lengths → gap fill → lift → validate → export → commit,
+The inbox's X-ray files are read first and the joint ratios recomputed (a task); then
+each clip passes ingest → bone lengths → gap fill → lift → validate → export → commit,
 each stage a task that calls ``handdb.pipeline``. Clips whose build key is already in the
 database are skipped (the database is the cache). Chains are submitted in windows of a few
 clips so memory is bounded by the largest clips in flight, not by the database.
@@ -11,6 +12,7 @@ Inputs the library refuses (bad files, no bone lengths) travel down the chain as
 from __future__ import annotations
 
 import json
+import re
 import time
 import uuid
 from dataclasses import asdict, dataclass, field
@@ -18,6 +20,7 @@ from datetime import UTC, datetime
 from pathlib import Path
 from typing import Any
 
+import pyarrow as pa
 from prefect import flow, get_run_logger, task
 from prefect.artifacts import create_markdown_artifact
 from prefect.cache_policies import NO_CACHE
@@ -73,10 +76,65 @@ def scan_inbox(inbox: str) -> InboxScan:
     return discover(Path(inbox))
 
 
+@task(name="xray-ratios", cache_policy=NO_CACHE, **IO_RETRIES)
+def xray_ratios(paths: list[Path], db: str) -> tuple[pa.Table, list[Refusal]]:
+    """Store the inbox's X-ray measurements and recompute the joint ratios."""
+    return pipeline.ingest_xray(paths, Store(db))
+
+
+Outcome = pipeline.ClipResult | Refusal
+
+
 @task(name="ingest", task_run_name="ingest {clip_id}", cache_policy=NO_CACHE, **IO_RETRIES)
-def ingest(entry: Any, clip_id: str, key: str) -> pipeline.ClipResult | Refusal:
+def ingest(entry: Any, clip_id: str, key: str) -> Outcome:
     """Read and validate one clip's files."""
-    return pipeline.ingest(entry, key)
+    outcome = pipeline.ingest(entry, key)
+    progress.advance(clip_id, "ingest")
+    return outcome
+
+
+@task(name="bone-lengths", task_run_name="bone lengths {clip_id}", cache_policy=NO_CACHE)
+def bone_lengths(result: Outcome, clip_id: str, ratios: pa.Table | None) -> Outcome:
+    """Give every bone of the clip a length."""
+    if isinstance(result, Refusal):
+        return result
+    return pipeline.resolve_bone_lengths(result, ratios)
+
+
+@task(name="gap-fill", task_run_name="gap fill {clip_id}", cache_policy=NO_CACHE)
+def gap_fill(result: Outcome, clip_id: str, options: pipeline.BuildOptions) -> Outcome:
+    """Fill the clip's missing 2D points."""
+    if isinstance(result, Refusal):
+        return result
+    return pipeline.fill(result, options)
+
+
+@task(name="lift", task_run_name="lift {clip_id}", cache_policy=NO_CACHE)
+def lift(result: Outcome, clip_id: str, options: pipeline.BuildOptions) -> Outcome:
+    """Give every joint of every frame its depth."""
+    if isinstance(result, Refusal):
+        return result
+    return pipeline.lift_clip(result, options)
+
+
+@task(name="validate", task_run_name="validate {clip_id}", cache_policy=NO_CACHE)
+def validate(result: Outcome, clip_id: str) -> Outcome:
+    """Compare lifting methods against ground truth; publish the comparison."""
+    if isinstance(result, Refusal):
+        return result
+    result = pipeline.validate(result)
+    if result.report is not None:
+        create_markdown_artifact(markdown=result.report, key=artifact_key("validation", clip_id),
+                                 description=f"depth validation of clip {clip_id}")
+    return result
+
+
+@task(name="export", task_run_name="export {clip_id}", cache_policy=NO_CACHE, **IO_RETRIES)
+def export(result: Outcome, clip_id: str, db: str, options: pipeline.BuildOptions) -> Outcome:
+    """Write the clip's USD animation and preview images."""
+    if isinstance(result, Refusal):
+        return result
+    return pipeline.export(result, Store(db), options)
 
 
 @task(name="commit", task_run_name="commit {clip_id}", cache_policy=NO_CACHE, **IO_RETRIES)
@@ -90,9 +148,20 @@ def commit(result: pipeline.ClipResult | Refusal, clip_id: str, db: str, inbox: 
     return result
 
 
-def _run_clip_chain(entry: Any, key: str, db: str, inbox: str) -> Any:
+def artifact_key(kind: str, clip_id: str) -> str:
+    """A Prefect artifact key (lowercase letters, digits, dashes) for a clip."""
+    return re.sub(r"[^a-z0-9-]+", "-", f"{kind}-{clip_id}".lower()).strip("-")
+
+
+def _run_clip_chain(entry: Any, key: str, db: str, inbox: str, ratios: pa.Table,
+                    options: pipeline.BuildOptions) -> Any:
     clip_id = entry.clip_id
     result = ingest.submit(entry, clip_id, key)
+    result = bone_lengths.submit(result, clip_id, ratios)
+    result = gap_fill.submit(result, clip_id, options)
+    result = lift.submit(result, clip_id, options)
+    result = validate.submit(result, clip_id)
+    result = export.submit(result, clip_id, db, options)
     return commit.submit(result, clip_id, db, inbox)
 
 
@@ -153,10 +222,13 @@ def build(
         summary.n_clips = len(scan.clips)
         progress.expect(summary.n_clips)
         summary.refusals.extend(Refusal.from_error(e) for e in scan.refused)
+        ratios, xray_refusals = xray_ratios(list(scan.others.get("xray", ())), db)
+        summary.refusals.extend(xray_refusals)
+        ratios_hash = pipeline.table_hash(ratios)
         committed = store.clip_build_keys()
         todo = []
         for entry in scan.clips:
-            key = pipeline.build_key(content_hash(entry), options)
+            key = pipeline.build_key(content_hash(entry), options, ratios_hash)
             if committed.get(entry.clip_id) == key:
                 summary.unchanged.append(entry.clip_id)
                 progress.advance(entry.clip_id, "unchanged")
@@ -167,7 +239,7 @@ def build(
         t0 = time.perf_counter()
         window = max(1, window)
         for start in range(0, len(todo), window):
-            futures = {entry.clip_id: _run_clip_chain(entry, key, db, inbox)
+            futures = {entry.clip_id: _run_clip_chain(entry, key, db, inbox, ratios, options)
                        for entry, key in todo[start:start + window]}
             for clip_id, future in futures.items():
                 future.wait()

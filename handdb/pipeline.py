@@ -1,30 +1,48 @@
 """The per-clip pipeline as plain functions: what each build stage does to one clip.
 
 Stages, in order: ingest (read and validate the clip's files) → bone lengths → gap fill →
-lift → validate → export. The Prefect flow in ``flows/build.py`` runs each stage as a
-task per clip; this module holds no orchestration, only the work and the assembly of a
-clip's rows into the tables of ``schemas/tables``.
+lift → validate → export. Each takes a :class:`ClipResult` and returns a new one (or a
+:class:`~handdb.quarantine.Refusal` when the clip's input cannot be used). The Prefect
+flow in ``flows/build.py`` runs each stage as a task; this module holds no orchestration,
+only the work and the assembly of a clip's rows into the tables of ``schemas/tables``.
 """
 
 from __future__ import annotations
 
 import hashlib
 import json
-from dataclasses import asdict, dataclass, field
+import tempfile
+from dataclasses import asdict, dataclass, replace
 from functools import cache
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pyarrow as pa
 
-from handdb import __version__, tables
+from handdb import __version__, tables, xray  # noqa: F401  (xray registers its inbox format)
+from handdb.bone_lengths import BoneLengths, bone_lengths_table, clip_bone_lengths
 from handdb.clip import Clip
-from handdb.errors import InputError
+from handdb.errors import BoneLengthError, InputError
+from handdb.gapfill import DEFAULT_METHOD as DEFAULT_GAP_FILL
+from handdb.gapfill import FillResult, UnknownMethodError, fill_gaps
+from handdb.lifting import DEFAULT_METHOD as DEFAULT_LIFT
+from handdb.lifting import LiftResult, available_methods, lift
 from handdb.paths import SCHEMAS_DIR
+from handdb.preview import write_preview_png
 from handdb.quarantine import Refusal
 from handdb.readers import ClipEntry, load_clip, tracks_2d_table, truth_3d_table
+from handdb.store import Store
+from handdb.usd_export import export_clip_usd
+from handdb.validation import comparison_chart, markdown_summary, validation_table
 
 PACKAGE_DIR = Path(__file__).resolve().parent
+
+#: Lifting methods compared against ground truth for every clip that has it.
+VALIDATED_METHODS: tuple[str, ...] = ("thesis", "thesis-nocheck", DEFAULT_LIFT)
+
+#: Folders of the database that hold files other than tables.
+USD_DIR, REPORTS_DIR = "usd", "reports"
 
 
 @dataclass(frozen=True)
@@ -44,8 +62,7 @@ class BuildOptions:
 def code_fingerprint() -> str:
     """SHA-256 over handdb's source and contracts: a rebuild key for code changes."""
     digest = hashlib.sha256()
-    files = sorted([*PACKAGE_DIR.rglob("*.py"), *SCHEMAS_DIR.rglob("*.*")])
-    for path in files:
+    for path in sorted([*PACKAGE_DIR.rglob("*.py"), *SCHEMAS_DIR.rglob("*.*")]):
         digest.update(path.relative_to(path.parents[1]).as_posix().encode())
         digest.update(path.read_bytes())
     return digest.hexdigest()
@@ -55,7 +72,7 @@ def build_key(content_hash: str, options: BuildOptions, context: str = "") -> st
     """Key under which a clip's rows are valid.
 
     It changes when the clip's files, the build options, the shared inputs a clip depends
-    on (``context``, e.g. the hash of the joint ratios) or handdb's code change.
+    on (``context``: the hash of the joint ratios) or handdb's code change.
     """
     payload = json.dumps(
         {"content": content_hash, "options": asdict(options), "context": context,
@@ -65,40 +82,47 @@ def build_key(content_hash: str, options: BuildOptions, context: str = "") -> st
     return hashlib.sha256(payload.encode()).hexdigest()
 
 
-@dataclass
-class ClipResult:
-    """Everything the stages produced for one clip, ready to be committed.
+def table_hash(table: pa.Table) -> str:
+    """SHA-256 of a table's rows, for :func:`build_key` contexts."""
+    return hashlib.sha256(json.dumps(table.to_pylist(), sort_keys=True,
+                                     default=str).encode()).hexdigest()
 
-    Attributes
-    ----------
-    clip
-        The ingested clip.
-    build_key
-        See :func:`build_key`.
-    uv
-        ``(T, J, 2) float64`` pixels used for lifting: observed, or filled; NaN if neither.
-    filled
-        ``(T, J) bool``: the point was filled.
-    fill_method
-        Gap-filling method, ``None`` until that stage ran.
-    xyz
-        ``(T, J, 3) float64`` lifted positions, clip units; ``None`` until lifting ran.
-    extra_tables
-        Further per-clip tables by name (``bone_lengths``, ``validation_joint``, ...).
-    """
+
+@dataclass(frozen=True)
+class ClipResult:
+    """Everything the stages produced for one clip, ready to be committed."""
 
     clip: Clip
     build_key: str
-    uv: np.ndarray
-    filled: np.ndarray
-    fill_method: str | None = None
-    xyz: np.ndarray | None = None
-    lift_method: str | None = None
-    scale: np.ndarray | None = None
-    sign_confidence: np.ndarray | None = None
-    length_inconsistency: np.ndarray | None = None
+    bones: BoneLengths | None = None
+    fill: FillResult | None = None
+    lifted: LiftResult | None = None
+    validation: pa.Table | None = None
+    report: str | None = None
     usd_path: str | None = None
-    extra_tables: dict[str, pa.Table] = field(default_factory=dict)
+
+    @property
+    def uv(self) -> np.ndarray:
+        """``(T, J, 2) float64`` pixels used for lifting: observed or filled, else NaN."""
+        if self.fill is not None:
+            return self.fill.uv
+        return np.where(self.clip.observed[..., None], self.clip.uv, np.nan)
+
+
+def _refuse(error: Exception, result: ClipResult, field: str | None = None) -> Refusal:
+    spec = result.clip.spec
+    if isinstance(error, InputError):
+        return Refusal.from_error(error, clip_id=spec.clip_id)
+    return Refusal(file=spec.path, reason=str(error), error_type=type(error).__name__,
+                   field=field, clip_id=spec.clip_id)
+
+
+def _method(choice: str | None, sidecar: dict[str, Any], default: str) -> tuple[str, dict]:
+    """The method to run and its parameters: the build's override, the sidecar, the default."""
+    if choice is not None:
+        return choice, {}
+    params = {k: v for k, v in sidecar.items() if k != "method"}
+    return sidecar.get("method", default), params
 
 
 def ingest(entry: ClipEntry, key: str) -> ClipResult | Refusal:
@@ -107,52 +131,136 @@ def ingest(entry: ClipEntry, key: str) -> ClipResult | Refusal:
         clip = load_clip(entry)
     except InputError as error:
         return Refusal.from_error(error, clip_id=entry.clip_id)
-    return start_result(clip, key)
+    return ClipResult(clip=clip, build_key=key)
 
 
-def start_result(clip: Clip, key: str) -> ClipResult:
-    """A result holding only the ingested clip: observed points, nothing filled or lifted."""
-    uv = np.where(clip.observed[..., None], clip.uv, np.nan)
-    return ClipResult(clip=clip, build_key=key, uv=uv,
-                      filled=np.zeros(clip.observed.shape, dtype=bool))
+def resolve_bone_lengths(result: ClipResult, ratios: pa.Table | None) -> ClipResult | Refusal:
+    """Give every bone of the clip a length, or refuse the clip when none can be had."""
+    if ratios is not None and ratios.num_rows == 0:
+        ratios = None
+    try:
+        bones = clip_bone_lengths(result.clip, ratios)
+    except BoneLengthError as error:
+        return _refuse(error, result, field="bone_lengths")
+    return replace(result, bones=bones)
 
 
-def _per_point(values: np.ndarray | None, shape: tuple[int, ...]) -> np.ndarray:
+def fill(result: ClipResult, options: BuildOptions) -> ClipResult | Refusal:
+    """Fill the clip's missing 2D points with the chosen gap-filling method."""
+    clip = result.clip
+    method, params = _method(options.gap_fill, clip.spec.gap_fill, DEFAULT_GAP_FILL)
+    try:
+        filled = fill_gaps(clip.uv, clip.observed, clip.skeleton, method, **params)
+    except (UnknownMethodError, TypeError, ValueError) as error:
+        return _refuse(error, result, field="gap_fill")
+    return replace(result, fill=filled)
+
+
+def lift_clip(result: ClipResult, options: BuildOptions) -> ClipResult | Refusal:
+    """Lift the filled 2D points to 3D with the chosen method."""
+    clip = result.clip
+    method, params = _method(options.lift, clip.spec.lift, DEFAULT_LIFT)
+    if method not in available_methods():
+        return _refuse(ValueError(f"unknown lifting method '{method}'; known: "
+                                  f"{', '.join(available_methods())}"), result, field="lift")
+    try:
+        lifted = lift(result.uv, clip.skeleton, result.bones.lengths, clip.spec.camera,
+                      method=method, hand=clip.spec.hand, **params)
+    except (TypeError, ValueError) as error:
+        return _refuse(error, result, field="lift")
+    return replace(result, lifted=lifted)
+
+
+def validate(result: ClipResult) -> ClipResult:
+    """Compare the lifting methods against the clip's ground truth, if it has any."""
+    clip = result.clip
+    if clip.truth is None:
+        return result
+    estimates = {result.lifted.method: result.lifted}
+    for method in VALIDATED_METHODS:
+        if method not in estimates:
+            estimates[method] = lift(result.uv, clip.skeleton, result.bones.lengths,
+                                     clip.spec.camera, method=method, hand=clip.spec.hand)
+    table = validation_table(clip.clip_id, clip.truth, estimates, clip.skeleton, clip.spec.units)
+    return replace(result, validation=table, report=markdown_summary(clip.clip_id, table))
+
+
+def _put(store: Store, local: Path, *parts: str) -> str:
+    """Copy a local file into the database; return its path relative to the database."""
+    store.fs.makedirs(store.path(*parts[:-1]), exist_ok=True)
+    if store.is_local:
+        local.replace(store.path(*parts))
+    else:
+        store.fs.put_file(str(local), store.path(*parts))
+    return "/".join(parts)
+
+
+def export(result: ClipResult, store: Store, options: BuildOptions) -> ClipResult:
+    """Write the clip's USD animation, preview sheet and validation chart into the database.
+
+    A clip with joints that could not be lifted is not exported (``usd_path`` stays null).
+    """
+    clip, lifted = result.clip, result.lifted
+    if not options.export_usd or not np.isfinite(lifted.xyz).all():
+        return result
+    spec = clip.spec
+    with tempfile.TemporaryDirectory() as scratch:
+        scratch_dir = Path(scratch)
+        usd = export_clip_usd(scratch_dir / f"{clip.clip_id}.usd", clip_id=clip.clip_id,
+                              skeleton=clip.skeleton, xyz=lifted.xyz,
+                              bone_lengths=result.bones.lengths, fps=spec.fps,
+                              units=spec.units, hand=spec.hand)
+        usd_path = _put(store, usd, USD_DIR, usd.name)
+        preview = write_preview_png(scratch_dir / "preview.png", skeleton=clip.skeleton,
+                                    xyz=lifted.xyz, units=spec.units, fps=spec.fps,
+                                    title=f"{clip.clip_id} ({lifted.method})")
+        _put(store, preview, REPORTS_DIR, clip.clip_id, "preview.png")
+        if result.validation is not None:
+            chart = scratch_dir / "depth.png"
+            chart.write_bytes(comparison_chart(clip.clip_id, result.validation, clip.skeleton))
+            _put(store, chart, REPORTS_DIR, clip.clip_id, "depth.png")
+    return replace(result, usd_path=usd_path)
+
+
+def _flat(values: np.ndarray | None, n: int) -> np.ndarray:
     if values is None:
-        return np.full(shape, np.nan)
-    return np.asarray(values, dtype=np.float64).reshape(shape)
+        return np.full(n, np.nan)
+    return np.asarray(values, dtype=np.float64).reshape(n)
 
 
 def joints_3d_table(result: ClipResult) -> pa.Table:
     """Rows of ``joints_3d``: one per frame and joint of the clip's skeleton."""
-    clip = result.clip
+    clip, lifted = result.clip, result.lifted
     n_frames, n_joints = clip.observed.shape
     n = n_frames * n_joints
     joint_index = np.tile(np.arange(n_joints, dtype=np.int32), n_frames)
-    xyz = result.xyz if result.xyz is not None else np.full((n_frames, n_joints, 3), np.nan)
-    scale = (np.repeat(result.scale, n_joints) if result.scale is not None
-             else np.full(n, np.nan))
-    filled = result.filled.reshape(n)
-    fill_method = np.where(filled, result.fill_method or "", None)
-    lifted = np.isfinite(xyz).all(axis=-1).reshape(n)
+    uv = result.uv.reshape(n, 2)
+    if result.fill is not None:
+        filled = result.fill.filled.reshape(n)
+        fill_method = np.where(filled, result.fill.fill_method.reshape(n), None)
+    else:
+        filled, fill_method = np.zeros(n, dtype=bool), np.full(n, None)
+    xyz = lifted.xyz.reshape(n, 3) if lifted is not None else np.full((n, 3), np.nan)
+    lifted_rows = np.isfinite(xyz).all(axis=-1)
     return tables.from_columns("joints_3d", {
         "clip_id": clip.clip_id,
         "frame": np.repeat(np.arange(n_frames, dtype=np.int32), n_joints),
         "joint": np.asarray(clip.skeleton.joints, dtype=object)[joint_index],
         "joint_index": joint_index,
-        "u": result.uv[..., 0].reshape(n),
-        "v": result.uv[..., 1].reshape(n),
+        "u": uv[:, 0],
+        "v": uv[:, 1],
         "observed": clip.observed.reshape(n),
         "confidence": clip.confidence.reshape(n),
         "filled": filled,
         "fill_method": fill_method,
-        "x": xyz[..., 0].reshape(n),
-        "y": xyz[..., 1].reshape(n),
-        "z": xyz[..., 2].reshape(n),
-        "lift_method": np.where(lifted, result.lift_method or "", None),
-        "scale": scale,
-        "sign_confidence": _per_point(result.sign_confidence, (n,)),
-        "length_inconsistency": _per_point(result.length_inconsistency, (n,)),
+        "x": xyz[:, 0],
+        "y": xyz[:, 1],
+        "z": xyz[:, 2],
+        "lift_method": np.where(lifted_rows, lifted.method if lifted else None, None),
+        "scale": (np.repeat(lifted.scale, n_joints) if lifted is not None
+                  else np.full(n, np.nan)),
+        "sign_confidence": _flat(lifted.sign_confidence if lifted else None, n),
+        "length_inconsistency": _flat(lifted.length_inconsistency if lifted else None, n),
     })
 
 
@@ -166,16 +274,19 @@ def _relative(path: str, inbox: Path) -> str:
 def clip_tables(result: ClipResult, inbox: Path) -> dict[str, pa.Table]:
     """Every per-clip table of the result, ready for :meth:`handdb.store.Store.commit_clip`."""
     clip = result.clip
-    source_files = [_relative(f, inbox) for f in clip.source_files]
     out = {
-        "clips": clips_table(result, source_files),
+        "clips": clips_table(result, [_relative(f, inbox) for f in clip.source_files]),
         "tracks_2d": tracks_2d_table(clip),
         "joints_3d": joints_3d_table(result),
-        **result.extra_tables,
     }
     truth = truth_3d_table(clip)
     if truth is not None:
         out["truth_3d"] = truth
+    if result.bones is not None:
+        out["bone_lengths"] = bone_lengths_table(clip.clip_id, clip.spec.subject, clip.skeleton,
+                                                 result.bones)
+    if result.validation is not None:
+        out["validation_joint"] = result.validation
     return out
 
 
@@ -202,10 +313,42 @@ def clips_table(result: ClipResult, source_files: list[str]) -> pa.Table:
         "n_joints": [clip.skeleton.n_joints],
         "n_observed": [int(clip.observed.sum())],
         "min_confidence": [spec.min_confidence],
-        "gap_fill_method": [result.fill_method],
-        "lift_method": [result.lift_method],
+        "gap_fill_method": [result.fill.method if result.fill else None],
+        "lift_method": [result.lifted.method if result.lifted else None],
         "has_truth": [clip.truth is not None],
         "sidecar": [spec.raw],
         "usd_path": [result.usd_path],
         "handdb_version": [__version__],
     })
+
+
+def ingest_xray(paths: list[Path], store: Store) -> tuple[pa.Table, list[Refusal]]:
+    """Store the X-ray measurements of ``paths`` and recompute the joint ratios.
+
+    Each file's measurements replace that file's partition of ``xray_measurements``;
+    refused rows (an image lacking a segment of a finger, bad numbers...) become
+    refusals and the rest goes on. ``joint_ratios`` is recomputed from every stored
+    measurement and written when it changed.
+
+    Returns
+    -------
+    ratios, refusals
+        The ``joint_ratios`` table (empty when there is no X-ray data: bone lengths then
+        fall back to the paper's Table 1) and the refused measurements.
+    """
+    from handdb.ratios import joint_ratios
+    from handdb.xray import read_xray
+
+    refusals: list[Refusal] = []
+    for path in sorted(paths):
+        measurements, errors = read_xray(path)
+        refusals += [Refusal.from_error(error) for error in errors]
+        key = path.name.removesuffix(xray.XRAY_SUFFIX)
+        if store.read("xray_measurements", key) != tables.conform("xray_measurements",
+                                                                  measurements):
+            store.write("xray_measurements", key, measurements)
+    ratios = joint_ratios(store.read_table("xray_measurements"))
+    previous = store.read("joint_ratios", "joint_ratios")
+    if previous is None or not previous.equals(tables.conform("joint_ratios", ratios)):
+        store.write("joint_ratios", "joint_ratios", ratios)
+    return ratios, refusals

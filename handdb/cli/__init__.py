@@ -152,7 +152,9 @@ def sql(
     elif format is OutputFormat.json:
         out.print_json(json.dumps(result.to_pylist(), default=str))
     else:
-        grid = Table(*result.column_names, show_lines=False)
+        grid = Table(show_lines=False)
+        for name in result.column_names:
+            grid.add_column(name, overflow="fold")
         for row in result.to_pylist():
             grid.add_row(*("" if v is None else str(v) for v in row.values()))
         out.print(grid)
