@@ -194,6 +194,17 @@ def demo(inbox: str = InboxOption, db: str = DbOption) -> None:
         raise typer.Exit(EXIT_FAILED)
 
 
+def _register_subcommands() -> None:
+    from handdb.cli import export, ratios
+
+    app.add_typer(ratios.app, name="ratios")
+    app.command("export-usd")(export.export_usd)
+    app.command("export-bvh")(export.export_bvh)
+
+
+_register_subcommands()
+
+
 def main() -> None:
     """Entry point of the ``handdb`` command."""
     app()
