@@ -94,6 +94,24 @@ def depth_magnitudes(
     return abs_dz, inconsistency
 
 
+def path_matrix(skeleton: Skeleton) -> np.ndarray:
+    """Which bones lie between the root and each joint.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(J, J) float64``: entry ``[j, k]`` is 1 when the bone ending at joint ``k`` is on
+        the path from the root to joint ``j`` (``k = j`` included, the root excluded).
+    """
+    paths = np.zeros((skeleton.n_joints, skeleton.n_joints))
+    for joint in range(skeleton.n_joints):
+        parent = skeleton.parents[joint]
+        if parent >= 0:
+            paths[joint] = paths[parent]
+            paths[joint, joint] = 1.0
+    return paths
+
+
 def accumulate_depths(signed_dz: np.ndarray, skeleton: Skeleton) -> np.ndarray:
     """Walk from the root to the tips, adding each bone's signed depth to its parent's.
 
@@ -102,18 +120,22 @@ def accumulate_depths(signed_dz: np.ndarray, skeleton: Skeleton) -> np.ndarray:
     signed_dz
         ``(..., J) float64``, depth of each joint relative to its parent; ignored at the
         root.
+    skeleton
+        Gives the tree.
 
     Returns
     -------
     numpy.ndarray
-        ``(..., J) float64`` depth of every joint relative to the root (root: 0).
+        ``(..., J) float64`` depth of every joint relative to the root (root: 0); NaN
+        below a bone whose depth is NaN.
     """
-    z = np.zeros_like(signed_dz)
-    for joint in range(skeleton.n_joints):
-        parent = skeleton.parents[joint]
-        if parent >= 0:
-            z[..., joint] = z[..., parent] + signed_dz[..., joint]
-    return z
+    paths = path_matrix(skeleton)
+    missing = np.isnan(signed_dz)
+    missing[..., skeleton.root] = False
+    z = np.where(missing, 0.0, signed_dz)
+    z[..., skeleton.root] = 0.0
+    z = z @ paths.T
+    return np.where(missing.astype(np.float64) @ paths.T > 0, np.nan, z)
 
 
 def orthographic_points(uv: np.ndarray, scale: np.ndarray, z: np.ndarray) -> np.ndarray:

@@ -38,6 +38,7 @@ from scipy.special import logsumexp
 from handdb.clip import Camera
 from handdb.lifting.geometry import (
     accumulate_depths,
+    path_matrix,
     bone_vectors_2d,
     centred_pixels,
     depth_magnitudes,
@@ -55,6 +56,9 @@ from handdb.skeletons import Skeleton
 #: Every sign pattern of a finger's three bones, ``(8, 3)``; row ``k`` has bit ``b`` of
 #: ``k`` (most significant first) set where bone ``b`` is negative.
 SIGN_STATES = np.array(list(itertools.product((1.0, -1.0), repeat=CHAIN_BONES)))
+
+#: The two signs a single bone can take, in the order of each bit of a state.
+BONE_SIGNS = np.array([1.0, -1.0])
 
 #: Flexion ranges of a long finger's MCP, PIP and DIP joints, degrees (flexion positive).
 LONG_FINGER_RANGE_DEG = np.array([[-30.0, 95.0], [-5.0, 115.0], [-15.0, 95.0]])
@@ -75,6 +79,10 @@ COUPLING_SIGMA_DEG = 25.0
 #: It settles the frames where a finger fits either palm tilt, flexed a little or a lot.
 COMFORT_CENTRE_DEG = 15.0
 COMFORT_SIGMA_DEG = 45.0
+
+#: Ridge added to the palm plane's normal equations (clip units²) so that a palm seen
+#: edge-on, its joints on one image line, still has a plane.
+PLANE_RIDGE = 1e-9
 
 #: Smallest spread of a bone's frame-to-frame depth change, as a share of its length.
 TEMPORAL_FLOOR = 0.05
@@ -114,19 +122,22 @@ def palm_signs(xy: np.ndarray, abs_dz: np.ndarray, skeleton: Skeleton,
         (:func:`continuity_signs`): a frame's state 0 continues the previous one's.
     """
     bones = layout.palm_bones
-    combos = np.array(list(itertools.product((1.0, -1.0), repeat=len(bones))))
-    signed = np.zeros(xy.shape[:2] + (len(combos),))
-    signed[:, bones] = (abs_dz[:, bones, None] * combos.T[None])
-    z = accumulate_depths(np.moveaxis(signed, 2, 1), skeleton)          # (T, C, J)
     joints = np.concatenate([[skeleton.root], bones])
+    to_depth = path_matrix(skeleton)[np.ix_(joints, bones)]             # (Q, P)
+    # Half the patterns suffice: a pattern and its mirror fit the plane equally well.
+    combos = np.array(list(itertools.product((1.0, -1.0), repeat=len(bones) - 1)))
+    combos = np.concatenate([np.ones((len(combos), 1)), combos], axis=1)
     design = np.concatenate([np.nan_to_num(xy[:, joints]),
-                             np.ones((len(xy), len(joints), 1))], axis=-1)
-    plane = np.linalg.pinv(design)                                       # (T, 3, Q)
-    z_palm = np.nan_to_num(z[:, :, joints])                              # (T, C, Q)
-    coef = np.einsum("tkq,tcq->tck", plane, z_palm)
-    residual = z_palm - np.einsum("tqk,tck->tcq", design, coef)
-    best = np.argmin(np.sum(residual**2, axis=-1), axis=1)
-    tilt = np.take_along_axis(coef[..., :2], best[:, None, None], axis=1)[:, 0]
+                             np.ones((len(xy), len(joints), 1))], axis=-1)  # (T, Q, 3)
+    fit = np.linalg.solve(np.swapaxes(design, 1, 2) @ design + PLANE_RIDGE * np.eye(3),
+                          np.swapaxes(design, 1, 2))                    # (T, 3, Q)
+    residual = np.eye(len(joints)) - design @ fit                        # (T, Q, Q)
+    spans = np.nan_to_num(abs_dz[:, bones])[:, None, :] * to_depth       # (T, Q, P)
+    quadratic = np.swapaxes(spans, 1, 2) @ residual @ spans              # (T, P, P)
+    misfit = np.einsum("cp,tpq,cq->tc", combos, quadratic, combos)
+    best = np.argmin(misfit, axis=1)
+    coef = np.einsum("tkq,tqp,tp->tk", fit, spans, combos[best])
+    tilt = coef[:, :2]
     return combos[best] * continuity_signs(tilt)[:, None]
 
 
@@ -183,23 +194,36 @@ def finger_log_likelihood(xy: np.ndarray, abs_dz: np.ndarray, palm_z: np.ndarray
     bones_2d = bone_vectors_2d(xy, skeleton)[:, layout.chains]          # (T, F, 3, 2)
     depth = abs_dz[:, layout.chains]                                     # (T, F, 3)
 
-    def component(axis: np.ndarray) -> np.ndarray:                      # (T, 2, F, 8, 3)
+    def component(axis: np.ndarray) -> np.ndarray:                      # (T, 2, F, 3, 2)
         planar = np.einsum("tfbc,tmfc->tmfb", bones_2d, axis[..., :2])
         along_z = depth[:, None] * axis[..., 2:3]
-        return planar[:, :, :, None, :] + SIGN_STATES * along_z[:, :, :, None, :]
+        return planar[..., None] + BONE_SIGNS * along_z[..., None]
 
     normal_f = np.broadcast_to(normal[:, :, None], forward.shape)
+    # Each bone's angle in the finger plane depends on its own sign only: (..., bone, sign).
     phi = np.arctan2(component(normal_f), component(forward))
-    theta = np.concatenate([phi[..., :1], _wrap(np.diff(phi, axis=-1))], axis=-1)
-    ranges = np.radians(np.where(layout.is_thumb[:, None, None], THUMB_RANGE_DEG,
-                                 LONG_FINGER_RANGE_DEG))                 # (F, 3, 2)
-    excess = (np.clip(ranges[:, None, :, 0] - theta, 0.0, None)
-              + np.clip(theta - ranges[:, None, :, 1], 0.0, None))
-    cost = np.sum((excess / np.radians(RANGE_SOFTNESS_DEG))**2, axis=-1)
-    coupling = (theta[..., 2] - DIP_PIP_RATIO * theta[..., 1]) / np.radians(COUPLING_SIGMA_DEG)
-    cost = cost + np.where(layout.is_thumb[:, None], 0.0, coupling**2)
-    comfort = (theta - np.radians(COMFORT_CENTRE_DEG)) / np.radians(COMFORT_SIGMA_DEG)
-    return np.nan_to_num(-0.5 * cost), np.nan_to_num(-0.5 * np.sum(comfort**2, axis=-1))
+    mcp = phi[..., 0, :, None, None]                                     # sign axes (1,2,3)
+    pip = _wrap(phi[..., 1, None, :, None] - mcp)
+    dip = _wrap(phi[..., 2, None, None, :] - phi[..., 1, None, :, None])
+    thumb = layout.is_thumb[:, None, None, None]
+    ranges = np.radians(np.where(thumb[..., None, None], THUMB_RANGE_DEG,
+                                 LONG_FINGER_RANGE_DEG))                 # (F,1,1,1,3,2)
+    softness = np.radians(RANGE_SOFTNESS_DEG)
+
+    def outside(angle: np.ndarray, joint: int) -> np.ndarray:
+        low, high = ranges[..., joint, 0], ranges[..., joint, 1]
+        return ((np.clip(low - angle, 0.0, None) + np.clip(angle - high, 0.0, None))
+                / softness) ** 2
+
+    coupling = (dip - DIP_PIP_RATIO * pip) / np.radians(COUPLING_SIGMA_DEG)
+    cost = (outside(mcp, 0) + outside(pip, 1) + outside(dip, 2)
+            + np.where(thumb, 0.0, coupling**2))
+    centre, spread = np.radians(COMFORT_CENTRE_DEG), np.radians(COMFORT_SIGMA_DEG)
+    comfort = (((mcp - centre) / spread) ** 2 + ((pip - centre) / spread) ** 2
+               + ((dip - centre) / spread) ** 2)
+    states = cost.shape[:-3] + (len(SIGN_STATES),)
+    return (np.nan_to_num(-0.5 * cost).reshape(states),
+            np.nan_to_num(-0.5 * comfort).reshape(states))
 
 
 def bone_log_odds(log_likelihood: np.ndarray) -> np.ndarray:
@@ -207,11 +231,14 @@ def bone_log_odds(log_likelihood: np.ndarray) -> np.ndarray:
 
     ``(..., 8)`` log-likelihoods in, ``(..., 3)`` log-odds out.
     """
-    positive = SIGN_STATES > 0                                           # (8, 3)
-    stacked = log_likelihood[..., None]
-    with_sign = logsumexp(np.where(positive, stacked, -np.inf), axis=-2)
-    against = logsumexp(np.where(positive, -np.inf, stacked), axis=-2)
-    return with_sign - against
+    peak = np.max(log_likelihood, axis=-1, keepdims=True)
+    weight = np.exp(log_likelihood - peak).reshape(log_likelihood.shape[:-1] + (2, 2, 2))
+    positive = np.stack([weight[..., 0, :, :].sum(axis=(-2, -1)),
+                         weight[..., :, 0, :].sum(axis=(-2, -1)),
+                         weight[..., :, :, 0].sum(axis=(-2, -1))], axis=-1)
+    total = weight.sum(axis=(-3, -2, -1))[..., None]
+    with np.errstate(divide="ignore"):
+        return np.log(positive) - np.log(total - positive)
 
 
 def _state_index(signs: np.ndarray) -> np.ndarray:
