@@ -215,7 +215,7 @@ class _Ledger:
         for j in np.flatnonzero(new):
             self.lengths[j] = lengths[j]
             self.sources[j] = source
-            self.details[j] = detail(j)
+            self.details[j] = detail(int(j))
             if residuals is not None:
                 self.residuals[j] = residuals[j]
             if n_frames is not None:

@@ -24,6 +24,7 @@ import math
 from collections import defaultdict
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import pyarrow as pa
 
@@ -67,7 +68,7 @@ def _positive_number(text: str, file: str, line: int, field: str) -> float:
     return value
 
 
-def _metadata(record: dict[str, str], file: str, line: int) -> dict[str, str | float | None]:
+def _metadata(record: dict[str | None, Any], file: str, line: int) -> dict[str, str | float | None]:
     values: dict[str, str | float | None] = {}
     for column in METADATA_COLUMNS:
         text = (record.get(column) or "").strip()
@@ -87,10 +88,13 @@ def _metadata(record: dict[str, str], file: str, line: int) -> dict[str, str | f
     return values
 
 
-def _parse_row(record: dict[str, str], file: str, line: int) -> _Row:
-    if None in record:
-        raise InputError(file, f"has {len(record) - 1 + len(record[None])} fields; the header "
-                         f"has {len(record) - 1}", line=line)
+def _parse_row(record: dict[str | None, Any], file: str, line: int) -> _Row:
+    """Parse one CSV record; ``csv.DictReader`` files surplus fields under ``None``."""
+    surplus = record.get(None)
+    if surplus:
+        header = len(record) - 1
+        raise InputError(file, f"has {header + len(surplus)} fields; the header has {header}",
+                         line=line)
     empty = [c for c in REQUIRED_COLUMNS if not (record[c] or "").strip()]
     if empty:
         raise InputError(file, "is empty", line=line, field=empty[0])
@@ -112,7 +116,7 @@ def _parse_row(record: dict[str, str], file: str, line: int) -> _Row:
     )
 
 
-def _read_records(path: Path) -> tuple[list[tuple[int, dict[str, str]]], str]:
+def _read_records(path: Path) -> tuple[list[tuple[int, dict[str | None, Any]]], str]:
     file = str(path)
     try:
         text = path.read_text(encoding="utf-8-sig")
