@@ -116,7 +116,8 @@ def _parse_row(record: dict[str | None, Any], file: str, line: int) -> _Row:
     )
 
 
-def _read_records(path: Path) -> tuple[list[tuple[int, dict[str | None, Any]]], str]:
+def _read_records(path: Path) -> list[tuple[int, dict[str | None, Any]]]:
+    """Return the non-blank records of the file with their 1-based line numbers."""
     file = str(path)
     try:
         text = path.read_text(encoding="utf-8-sig")
@@ -141,7 +142,7 @@ def _read_records(path: Path) -> tuple[list[tuple[int, dict[str | None, Any]]], 
         (v or "").strip() for v in record.values() if isinstance(v, str))]
     if not records:
         raise InputError(file, "has a header but no measurements", line=1)
-    return records, file
+    return records
 
 
 def _complete_groups(rows: list[_Row], refused: dict[tuple[str, str], list[int]],
@@ -217,7 +218,8 @@ def read_xray(path: str | Path) -> tuple[pa.Table, list[InputError]]:
         When the file cannot be read as an X-ray table at all: not UTF-8, empty, no
         measurements, or a header lacking a required column or naming an unknown one.
     """
-    records, file = _read_records(Path(path))
+    file = str(path)
+    records = _read_records(Path(path))
     rows: list[_Row] = []
     errors: list[InputError] = []
     refused: dict[tuple[str, str], list[int]] = defaultdict(list)
