@@ -1,0 +1,166 @@
+"""``auto``, the default: per gap, the method that suits it, in the palm frame, then refined.
+
+1. The palm's affine motion is fitted frame by frame and every track is expressed in the
+   palm frame (:mod:`handdb.gapfill.palm_frame`), where only finger bending is left to
+   bridge.
+2. Palm points (wrist, finger bases) stand still there: every gap of theirs is bridged by
+   interpolation and held at the clip's ends, which makes a rigid-body fill.
+3. Finger points in interior gaps of at most ``short_gap`` frames: PCHIP interpolation.
+4. Finger points in longer, leading or trailing gaps: two estimates from the other joints,
+   the point carried with its parent bone (:func:`~handdb.gapfill.rigid.carry_along_chains`,
+   the joint's angle changing linearly across the gap) and the low-rank reconstruction
+   (:mod:`handdb.gapfill.lowrank`), are weighed per joint by how well each refills runs of
+   that joint's own observed frames hidden on purpose (:func:`validation_mask`): each gets
+   the other's share of the squared validation error. ``long_gaps`` picks ``"chain"``,
+   ``"lowrank"`` or their plain mean (``"ensemble"``) instead.
+5. Joints never observed: the rest pose fitted to the observed joints of each frame.
+6. Kinematic refinement (:mod:`handdb.gapfill.refine`): filled points are pulled back
+   where they would stretch a bone beyond its length.
+
+Each filled point is labelled with the rule that filled it (``rigid``, ``pchip``,
+``validated``, ``rest-pose``).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from handdb.gapfill.gaps import Gaps, find_gaps
+from handdb.gapfill.interpolate import interpolate_gaps
+from handdb.gapfill.lowrank import DEFAULT_VARIANCE, blend_to_edges, lowrank_reconstruct
+from handdb.gapfill.palm_frame import palm_motion, to_image, to_palm_frame
+from handdb.gapfill.refine import refine_bone_lengths
+from handdb.gapfill.registry import OFFLINE, MethodOutput, register
+from handdb.gapfill.rigid import carry_along_chains, palm_joints, place_from_rest_pose
+from handdb.skeletons import Skeleton
+
+#: Longest interior gap (frames) bridged by interpolation rather than by the other joints.
+SHORT_GAP = 8
+
+#: How long finger gaps are filled: carried with the parent bone, from the low-rank model,
+#: the mean of the two, or the two weighed by a validation on the joint's own frames.
+LONG_GAP_RULES = ("chain", "lowrank", "ensemble", "validated")
+
+#: Observed runs per joint hidden to weigh the long-gap rules against each other.
+VALIDATION_GAPS = 3
+
+
+def _chain_and_lowrank(
+    local: np.ndarray, filled: np.ndarray, missing: np.ndarray, gaps: Gaps,
+    skeleton: Skeleton, variance: float,
+) -> tuple[np.ndarray, np.ndarray]:
+    chain = carry_along_chains(filled, missing, gaps, skeleton)
+    model = lowrank_reconstruct(local, missing, variance=variance)
+    return chain, blend_to_edges(filled, model, gaps)
+
+
+def validation_mask(missing: np.ndarray, gaps: Gaps, seed: int = 0) -> np.ndarray:
+    """Hide observed runs of the joints of ``gaps``, as long as their gaps, to score rules.
+
+    For each joint, up to :data:`VALIDATION_GAPS` runs of the median length of its gaps are
+    placed at random where the joint is observed throughout the run and one frame
+    either side.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(T, J) bool``: the points to hide (never a missing point).
+    """
+    rng = np.random.default_rng(seed)
+    n_frames = missing.shape[0]
+    hidden = np.zeros_like(missing)
+    for joint in np.unique(gaps.joint):
+        length = int(min(np.median(gaps.length[gaps.joint == joint]), n_frames // 4))
+        window = np.ones(length + 2)
+        clear = np.convolve(~missing[:, joint], window, mode="valid") == window.size
+        starts = np.flatnonzero(clear) + 1
+        for start in rng.permutation(starts)[:VALIDATION_GAPS]:
+            hidden[start:start + length, joint] |= ~hidden[start - 1:start + length + 1,
+                                                            joint].any()
+    return hidden
+
+
+def _long_gap_fill(
+    local: np.ndarray, filled: np.ndarray, missing: np.ndarray, gaps: Gaps,
+    skeleton: Skeleton, rule: str, variance: float,
+) -> np.ndarray:
+    if rule == "chain":
+        return carry_along_chains(filled, missing, gaps, skeleton)
+    chain, lowrank = _chain_and_lowrank(local, filled, missing, gaps, skeleton, variance)
+    if rule == "lowrank":
+        return lowrank
+    if rule == "ensemble":
+        return (chain + lowrank) / 2
+    hidden = validation_mask(missing, gaps)
+    trial_missing = missing | hidden
+    trial_local = np.where(hidden[..., None], np.nan, local)
+    trial_filled = np.where(hidden[..., None], interpolate_gaps(trial_local, trial_missing), filled)
+    trial_gaps = find_gaps(hidden)
+    trial_chain, trial_lowrank = _chain_and_lowrank(
+        trial_local, trial_filled, trial_missing, trial_gaps, skeleton, variance)
+    chain_error = np.nansum(np.where(hidden, np.sum((trial_chain - local) ** 2, -1), 0), axis=0)
+    lowrank_error = np.nansum(np.where(hidden, np.sum((trial_lowrank - local) ** 2, -1), 0), axis=0)
+    total = chain_error + lowrank_error
+    lowrank_share = np.where(total > 0, chain_error / np.where(total > 0, total, 1), 0.5)
+    return chain + lowrank_share[None, :, None] * (lowrank - chain)
+
+
+@register("auto", OFFLINE, "default: rigid palm, PCHIP short gaps, validated chain/low-rank")
+def fill_auto(
+    uv: np.ndarray,
+    missing: np.ndarray,
+    skeleton: Skeleton,
+    *,
+    short_gap: int = SHORT_GAP,
+    long_gaps: str = "validated",
+    variance: float = DEFAULT_VARIANCE,
+    bone_lengths: dict[str, float] | None = None,
+    scale: float | np.ndarray | None = None,
+) -> MethodOutput:
+    """Fill every gap with the rule that suits it (see the module docstring).
+
+    Parameters
+    ----------
+    uv, missing, skeleton
+        As for every method (see :mod:`handdb.gapfill.registry`).
+    short_gap
+        Longest interior finger gap, frames, bridged by PCHIP.
+    long_gaps
+        Rule for longer finger gaps, one of :data:`LONG_GAP_RULES`.
+    variance
+        Variance share kept by the low-rank model.
+    bone_lengths, scale
+        Optional 3D bone lengths (child joint -> length, clip units) and the image scale
+        (pixels per unit, scalar or ``(T,)``) that bound the projected bones in refinement.
+    """
+    if long_gaps not in LONG_GAP_RULES:
+        raise ValueError(
+            f"long_gaps must be one of {', '.join(LONG_GAP_RULES)}; got '{long_gaps}'"
+        )
+    gaps = find_gaps(missing)
+    motion = palm_motion(uv, missing, skeleton)
+    local = uv if motion is None else to_palm_frame(uv, motion)
+
+    palm = palm_joints(skeleton)[gaps.joint]
+    short = gaps.interior & (gaps.length <= short_gap)
+    partial = ~gaps.whole_clip
+    by_model = partial & ~palm & ~short
+
+    filled = interpolate_gaps(local, missing, "pchip")
+    if by_model.any():
+        filled = _long_gap_fill(local, filled, missing, gaps.select(by_model), skeleton,
+                                long_gaps, variance)
+    if motion is not None:
+        filled = to_image(filled, motion)
+
+    labels = np.full(missing.shape, "", dtype=object)
+    for rule, chosen in (("rigid", partial & palm), ("pchip", partial & ~palm & short),
+                         (long_gaps, by_model), ("rest-pose", gaps.whole_clip)):
+        _, frame, joint = gaps.select(chosen).frames()
+        labels[frame, joint] = rule
+    never_seen = np.unique(gaps.joint[gaps.whole_clip])
+    if never_seen.size:
+        filled = place_from_rest_pose(filled, missing, skeleton, never_seen)
+    refined = refine_bone_lengths(filled, missing, skeleton, bone_lengths=bone_lengths,
+                                  scale=scale)
+    return MethodOutput(refined, labels=labels)

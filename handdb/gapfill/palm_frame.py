@@ -1,0 +1,110 @@
+"""The palm's image motion, and tracks seen from the palm (the palm frame).
+
+The palm points (:func:`~handdb.gapfill.rigid.palm_joints`) move nearly as one rigid body,
+which an orthographic camera shows as a 2D affine map per frame. :func:`palm_motion` finds
+that map for every frame: it fits the observed palm points to a reference palm (the median
+palm shape, found by aligning every frame to the rest pose, then to that median), and
+interpolates the map's six parameters over time in frames with fewer than three palm points.
+Expressed in the palm frame (:func:`to_palm_frame`), palm points stand still and finger
+points move only as the fingers bend: gaps there are far easier to bridge.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from handdb.gapfill.rest_pose import rest_pose_2d
+from handdb.gapfill.rigid import MIN_PALM_POINTS, palm_joints
+from handdb.gapfill.transfer import fit_maps
+from handdb.skeletons import Skeleton
+
+
+@dataclass(frozen=True)
+class PalmMotion:
+    """The affine map from the palm frame to the image in every frame.
+
+    Attributes
+    ----------
+    linear
+        ``(T, 2, 2) float64``.
+    offset
+        ``(T, 2) float64``, pixels: image = ``linear @ palm_frame + offset``.
+    fitted
+        ``(T,) bool``: fitted to the frame's own palm points (else interpolated in time and
+        corrected).
+    """
+
+    linear: np.ndarray
+    offset: np.ndarray
+    fitted: np.ndarray
+
+
+def _fit_to(reference: np.ndarray, uv: np.ndarray, palm_seen: np.ndarray):
+    n_frames = uv.shape[0]
+    source = np.broadcast_to(reference, (n_frames, *reference.shape))
+    return fit_maps(source, uv, palm_seen)
+
+
+def _interpolate_in_time(values: np.ndarray, known: np.ndarray) -> np.ndarray:
+    frames = np.arange(values.shape[0])
+    flat = values.reshape(values.shape[0], -1)
+    filled = np.stack([np.interp(frames, frames[known], flat[known, k])
+                       for k in range(flat.shape[1])], axis=1)
+    return filled.reshape(values.shape)
+
+
+def palm_motion(uv: np.ndarray, missing: np.ndarray, skeleton: Skeleton) -> PalmMotion | None:
+    """Fit the palm's affine motion, frame by frame.
+
+    Parameters
+    ----------
+    uv
+        ``(T, J, 2) float64``, pixels, NaN where missing.
+    missing
+        ``(T, J) bool``.
+    skeleton
+        The clip's skeleton.
+
+    Returns
+    -------
+    PalmMotion or None
+        ``None`` when no frame shows :data:`~handdb.gapfill.rigid.MIN_PALM_POINTS` palm
+        points.
+    """
+    palm = palm_joints(skeleton)
+    palm_seen = ~missing & palm
+    fitted = palm_seen.sum(axis=1) >= MIN_PALM_POINTS
+    if not fitted.any():
+        return None
+    reference = rest_pose_2d(skeleton)
+    for _ in range(2):
+        linear, offset, _ = _fit_to(reference, uv, palm_seen)
+        inverse = np.linalg.inv(np.where(fitted[:, None, None], linear, np.eye(2)))
+        canonical = np.einsum("tij,tkj->tki", inverse, np.nan_to_num(uv) - offset[:, None])
+        canonical = np.where((palm_seen & fitted[:, None])[..., None], canonical, np.nan)
+        seen_once = ~np.isnan(canonical[..., 0]).all(axis=0)
+        reference = np.where(seen_once[:, None], np.nanmedian(
+            np.where(seen_once[None, :, None], canonical, 0.0), axis=0), reference)
+    linear, offset, _ = _fit_to(reference, uv, palm_seen)
+    linear = _interpolate_in_time(linear, fitted)
+    offset = _interpolate_in_time(offset, fitted)
+    predicted = np.einsum("tij,kj->tki", linear, reference) + offset[:, None]
+    correction, shift, count = fit_maps(predicted, uv, palm_seen & ~fitted[:, None], affine=False)
+    corrected = count >= 1
+    linear = np.where(corrected[:, None, None], correction @ linear, linear)
+    offset = np.where(corrected[:, None], np.einsum("tij,tj->ti", correction, offset) + shift,
+                      offset)
+    return PalmMotion(linear=linear, offset=offset, fitted=fitted)
+
+
+def to_palm_frame(uv: np.ndarray, motion: PalmMotion) -> np.ndarray:
+    """Express image points in the palm frame, ``(T, J, 2) -> (T, J, 2)``."""
+    inverse = np.linalg.inv(motion.linear)
+    return np.einsum("tij,tkj->tki", inverse, uv - motion.offset[:, None])
+
+
+def to_image(points: np.ndarray, motion: PalmMotion) -> np.ndarray:
+    """Map palm-frame points back to the image, ``(T, J, 2) -> (T, J, 2)`` pixels."""
+    return np.einsum("tij,tkj->tki", motion.linear, points) + motion.offset[:, None]

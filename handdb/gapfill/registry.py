@@ -1,0 +1,225 @@
+"""The gap-filling method registry and :func:`fill_gaps`, the one entry point.
+
+A method is a function ``(uv, missing, skeleton, **params) -> MethodOutput``: ``uv`` is a
+``(T, J, 2)`` copy of the tracks with NaN at every missing point, ``missing`` the
+``(T, J) bool`` mask of those points. It returns the tracks with the missing points it could
+fill filled (NaN where it declined) and notes on what it did. :func:`fill_gaps` hides the
+missing points from the method, keeps every observed point as it was, and records which
+point was filled by what.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+
+from handdb.errors import HanddbError
+from handdb.gapfill.gaps import find_gaps
+from handdb.skeletons import Skeleton
+
+#: Flag kinds. A gap at the start of the clip (the joint is missing in the first frame).
+LEADING = "leading"
+#: A gap that runs to the last frame.
+TRAILING = "trailing"
+#: A joint missing in every frame of the clip.
+WHOLE_CLIP = "whole_clip"
+#: A thesis method had fewer earlier frames than it needs and used a simpler rule.
+SHORT_HISTORY = "short_history"
+#: Missing points the method left unfilled (NaN).
+UNFILLED = "unfilled"
+
+#: The method :func:`fill_gaps` uses unless told otherwise.
+DEFAULT_METHOD = "auto"
+
+#: Family of the five methods of the thesis (causal extrapolation).
+THESIS = "thesis"
+#: Family of the offline methods (frames after a gap are known).
+OFFLINE = "offline"
+
+
+class UnknownMethodError(HanddbError, ValueError):
+    """A gap-filling method name that is not registered."""
+
+
+@dataclass(frozen=True)
+class GapFlag:
+    """A note on one gap (or part of one): what was special and what was done.
+
+    ``start`` and ``stop`` are frame numbers, ``stop`` exclusive.
+    """
+
+    joint: str
+    start: int
+    stop: int
+    kind: str
+    note: str
+
+
+@dataclass(frozen=True)
+class MethodOutput:
+    """What a method returns.
+
+    Attributes
+    ----------
+    uv
+        ``(T, J, 2) float64``, pixels: the tracks with the missing points filled, NaN where
+        the method could not fill.
+    labels
+        ``(T, J)`` str: the name of the rule that filled each point, for methods that
+        combine several; ``None`` to label every filled point with the method's name.
+    flags
+        Notes on particular gaps.
+    """
+
+    uv: np.ndarray
+    labels: np.ndarray | None = None
+    flags: tuple[GapFlag, ...] = ()
+
+
+GapFiller = Callable[..., MethodOutput]
+
+
+@dataclass(frozen=True)
+class MethodInfo:
+    """A registered method: its name, function, family and a one-line summary."""
+
+    name: str
+    fill: GapFiller
+    family: str
+    summary: str
+
+
+@dataclass(frozen=True)
+class FillResult:
+    """The result of :func:`fill_gaps`.
+
+    Attributes
+    ----------
+    uv
+        ``(T, J, 2) float64``, pixels: observed points unchanged, missing points filled
+        (NaN where the method could not fill).
+    filled
+        ``(T, J) bool``: the point was missing and has been filled.
+    method
+        The method asked for.
+    fill_method
+        ``(T, J)`` str: the rule that filled each point (``""`` where not filled).
+    flags
+        Notes on leading, trailing and whole-clip gaps, short histories, unfilled points.
+    """
+
+    uv: np.ndarray
+    filled: np.ndarray
+    method: str
+    fill_method: np.ndarray
+    flags: tuple[GapFlag, ...]
+
+    def flags_of(self, kind: str) -> tuple[GapFlag, ...]:
+        """Return the flags of one kind."""
+        return tuple(f for f in self.flags if f.kind == kind)
+
+
+METHODS: dict[str, MethodInfo] = {}
+
+
+def register(name: str, family: str, summary: str) -> Callable[[GapFiller], GapFiller]:
+    """Register a gap-filling function under ``name`` (decorator)."""
+
+    def decorate(fill: GapFiller) -> GapFiller:
+        METHODS[name] = MethodInfo(name, fill, family, summary)
+        return fill
+
+    return decorate
+
+
+def method_names(family: str | None = None) -> tuple[str, ...]:
+    """Names of the registered methods, of one family or of all, in registration order."""
+    return tuple(n for n, info in METHODS.items() if family in (None, info.family))
+
+
+def _edge_flags(missing: np.ndarray, skeleton: Skeleton) -> list[GapFlag]:
+    gaps = find_gaps(missing)
+    flags = []
+    for j, start, stop, whole, leading in zip(
+        gaps.joint, gaps.start, gaps.stop, gaps.whole_clip, gaps.leading, strict=True
+    ):
+        if whole:
+            kind, note = WHOLE_CLIP, "never observed in the clip"
+        elif leading:
+            kind, note = LEADING, "missing from the first frame: no earlier data"
+        elif stop == gaps.n_frames:
+            kind, note = TRAILING, "missing to the last frame: no later data"
+        else:
+            continue
+        flags.append(GapFlag(skeleton.joints[j], int(start), int(stop), kind, note))
+    return flags
+
+
+def _unfilled_flags(unfilled: np.ndarray, skeleton: Skeleton) -> list[GapFlag]:
+    gaps = find_gaps(unfilled)
+    return [
+        GapFlag(skeleton.joints[j], int(a), int(b), UNFILLED, "the method left these points NaN")
+        for j, a, b in zip(gaps.joint, gaps.start, gaps.stop, strict=True)
+    ]
+
+
+def fill_gaps(
+    uv: np.ndarray,
+    observed: np.ndarray,
+    skeleton: Skeleton,
+    method: str = DEFAULT_METHOD,
+    **params: object,
+) -> FillResult:
+    """Fill the missing points of 2D tracks.
+
+    Parameters
+    ----------
+    uv
+        ``(T, J, 2) float64``, pixels; values at unobserved points are ignored.
+    observed
+        ``(T, J) bool``: the point is known (present and confident enough).
+    skeleton
+        The skeleton the joint axis follows.
+    method
+        A registered method name (see :data:`METHODS`); :data:`DEFAULT_METHOD` by default.
+    **params
+        Parameters of the method.
+
+    Returns
+    -------
+    FillResult
+        A filled copy; ``uv`` and ``observed`` are not modified.
+
+    Raises
+    ------
+    UnknownMethodError
+        If ``method`` is not registered.
+    ValueError
+        If the shapes of ``uv``, ``observed`` and ``skeleton`` disagree.
+    """
+    if method not in METHODS:
+        raise UnknownMethodError(
+            f"unknown gap-filling method '{method}'; known: {', '.join(METHODS)}"
+        )
+    uv = np.asarray(uv, dtype=np.float64)
+    observed = np.asarray(observed, dtype=bool)
+    if uv.ndim != 3 or uv.shape[1:] != (skeleton.n_joints, 2) or observed.shape != uv.shape[:2]:
+        raise ValueError(
+            f"uv must be (T, {skeleton.n_joints}, 2) and observed (T, {skeleton.n_joints}) for "
+            f"skeleton '{skeleton.name}'; got {uv.shape} and {observed.shape}"
+        )
+    missing = ~observed | ~np.isfinite(uv).all(axis=-1)
+    hidden = np.where(missing[..., None], np.nan, uv)
+    output = METHODS[method].fill(hidden, missing, skeleton, **params)
+    filled_uv = np.where(missing[..., None], output.uv, uv)
+    filled = missing & np.isfinite(filled_uv).all(axis=-1)
+    labels = method if output.labels is None else output.labels
+    fill_method = np.where(filled, labels, "")
+    flags = (
+        *_edge_flags(missing, skeleton),
+        *output.flags,
+        *_unfilled_flags(missing & ~filled, skeleton),
+    )
+    return FillResult(filled_uv, filled, method, fill_method, flags)

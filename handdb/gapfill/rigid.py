@@ -1,0 +1,179 @@
+"""Rigid-body filling: carry missing points along with the palm.
+
+The wrist, the finger bases and the palm points move together as one nearly rigid body.
+Seen orthographically, such a body moves by an affine map of the image, so a missing palm
+point is placed by fitting that map from the last frame before its gap (and the first frame
+after it) to the current frame, on the palm points visible in both, and carrying the
+point's last (next) known position with it; the two estimates are blended across the gap.
+This is the image-space counterpart of the rigid-body fill of optical motion capture. A
+joint never observed is placed by fitting the rest pose to the observed joints of each frame.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from handdb.gapfill.gaps import Gaps, find_gaps
+from handdb.gapfill.registry import OFFLINE, MethodOutput, register
+from handdb.gapfill.rest_pose import rest_pose_2d
+from handdb.gapfill.transfer import map_points
+from handdb.skeletons import Skeleton
+
+#: Roles of the joints that move with the palm.
+PALM_ROLES = frozenset({"wrist", "palm_fold", "palm_center", "cmc", "mcp"})
+
+#: Fewest palm points a frame needs before the rest pose is fitted to them alone.
+MIN_PALM_POINTS = 3
+
+
+def palm_joints(skeleton: Skeleton) -> np.ndarray:
+    """``(J,) bool``: joints that move with the palm (wrist, palm points, finger bases).
+
+    The thumb's MCP is left out: the thumb's base bone swings on its own.
+    """
+    roles = np.asarray(skeleton.roles)
+    fingers = np.asarray(skeleton.fingers)
+    return np.isin(roles, list(PALM_ROLES)) & ~((fingers == "thumb") & (roles == "mcp"))
+
+
+def _carry(
+    uv: np.ndarray, missing: np.ndarray, reference: np.ndarray, frame: np.ndarray,
+    joint: np.ndarray, basis: np.ndarray, affine: bool,
+) -> np.ndarray:
+    joints = np.arange(uv.shape[1])
+    weights = (basis & ~missing[reference] & ~missing[frame]
+               & (joints[None, :] != joint[:, None]))
+    query = uv[reference, joint]
+    mapped, ok = map_points(uv[reference], uv[frame], weights, query, affine=affine)
+    return np.where(ok[:, None], mapped, query)
+
+
+def carry_across_gaps(
+    uv: np.ndarray, missing: np.ndarray, gaps: Gaps, basis: np.ndarray, *, affine: bool = True
+) -> np.ndarray:
+    """Fill the points of non-whole-clip ``gaps`` by carrying them with the ``basis`` joints.
+
+    Parameters
+    ----------
+    uv
+        ``(T, J, 2) float64``, pixels, NaN where missing.
+    missing
+        ``(T, J) bool``.
+    gaps
+        The gaps to fill; each must have an observed frame before or after it.
+    basis
+        ``(J,) bool``: the joints whose motion carries the missing points.
+    affine
+        Fit affine maps (else similarities).
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(T, J, 2) float64``: ``uv`` with the gaps' points filled.
+    """
+    gap, frame, joint = gaps.frames()
+    before = np.maximum(gaps.start[gap] - 1, 0)
+    after = np.minimum(gaps.stop[gap], gaps.n_frames - 1)
+    from_before = _carry(uv, missing, before, frame, joint, basis, affine)
+    from_after = _carry(uv, missing, after, frame, joint, basis, affine)
+    share_after = ((frame - before) / np.maximum(after - before, 1))[:, None]
+    blended = (1 - share_after) * from_before + share_after * from_after
+    blended = np.where(gaps.leading[gap][:, None], from_after, blended)
+    blended = np.where(gaps.trailing[gap][:, None], from_before, blended)
+    filled = uv.copy()
+    filled[frame, joint] = blended
+    return filled
+
+
+def place_from_rest_pose(
+    uv: np.ndarray, missing: np.ndarray, skeleton: Skeleton, joints: np.ndarray
+) -> np.ndarray:
+    """Place never-observed ``joints`` in every frame by fitting the rest pose to the others.
+
+    The rest pose is fitted to the frame's observed palm points when there are at least
+    :data:`MIN_PALM_POINTS`, else to all its observed joints.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(T, J, 2) float64``: ``uv`` with ``joints`` filled (NaN in frames with no
+        observed joint at all).
+    """
+    n_frames = uv.shape[0]
+    frame = np.repeat(np.arange(n_frames), joints.size)
+    joint = np.tile(joints, n_frames)
+    rest = rest_pose_2d(skeleton)
+    seen = ~missing[frame]
+    palm_seen = seen & palm_joints(skeleton)
+    enough_palm = palm_seen.sum(axis=1) >= MIN_PALM_POINTS
+    weights = np.where(enough_palm[:, None], palm_seen, seen)
+    source = np.broadcast_to(rest, (frame.size, *rest.shape))
+    mapped, _ = map_points(source, uv[frame], weights, rest[joint])
+    filled = uv.copy()
+    filled[frame, joint] = mapped
+    return filled
+
+
+@register("rigid", OFFLINE, "every missing point carried with the palm's affine motion")
+def fill_rigid(
+    uv: np.ndarray, missing: np.ndarray, skeleton: Skeleton, *, affine: bool = True
+) -> MethodOutput:
+    """Fill every gap by carrying the point with the palm (a rigid-body fill).
+
+    Exact for points that move rigidly with the palm; fingers that bend during a gap
+    are only carried along with the hand.
+    """
+    gaps = find_gaps(missing)
+    basis = palm_joints(skeleton)
+    filled = carry_across_gaps(uv, missing, gaps.select(~gaps.whole_clip), basis, affine=affine)
+    never_seen = np.unique(gaps.joint[gaps.whole_clip])
+    if never_seen.size:
+        filled = place_from_rest_pose(filled, missing, skeleton, never_seen)
+    return MethodOutput(filled)
+
+
+def carry_along_chains(
+    uv: np.ndarray, missing: np.ndarray, gaps: Gaps, skeleton: Skeleton
+) -> np.ndarray:
+    """Fill finger gaps by carrying each point with its parent bone.
+
+    The bone from a joint's grandparent to its parent moves (in the image) by a similarity;
+    applied to the joint's last known position before the gap and its first after it, and
+    blended across the gap, it keeps the joint's angle to its parent bone changing
+    linearly through the gap. Joints are visited from the root outward, so a joint's
+    parent bone is complete (observed or already filled) when the joint is filled.
+
+    Parameters
+    ----------
+    uv
+        ``(T, J, 2) float64``, pixels; the joints of the palm and every gap not in
+        ``gaps`` must already be filled.
+    missing
+        ``(T, J) bool``: the points that were missing.
+    gaps
+        Non-whole-clip gaps of joints that have a parent (a joint hanging from the root is
+        carried with the palm instead).
+    skeleton
+        The clip's skeleton.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(T, J, 2) float64``: ``uv`` with ``gaps`` filled.
+    """
+    unresolved = np.zeros_like(missing)
+    _, frame, joint_of_point = gaps.frames()
+    unresolved[frame, joint_of_point] = True
+    filled = uv
+    for joint in np.unique(gaps.joint):
+        parent = skeleton.parents[joint]
+        grandparent = skeleton.parents[parent]
+        if grandparent < 0:
+            bone = palm_joints(skeleton)
+        else:
+            bone = np.zeros(skeleton.n_joints, dtype=bool)
+            bone[[parent, grandparent]] = True
+        filled = carry_across_gaps(filled, unresolved, gaps.select(gaps.joint == joint), bone,
+                                   affine=False)
+        unresolved[:, joint] = False
+    return filled

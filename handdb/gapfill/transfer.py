@@ -1,0 +1,104 @@
+"""Carry a point from one 2D configuration of the hand to another (batched point-set fits).
+
+A set of points that moves rigidly in 3D, seen through an orthographic camera, moves by a
+2D affine map in the image; the palm is nearly such a set. :func:`map_points` fits, for
+many pairs of configurations at once, the map from a *source* set of points to a *target*
+set (weighted least squares over the points present in both) and applies it to a query
+point. It fits an affine map where at least three points are present and well spread, a
+similarity (rotation, scale, translation; closed form with complex numbers) where two are,
+and a translation where one is.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+#: Smallest ratio of the two principal spreads of the source points accepted for an
+#: affine fit (below it the points are nearly collinear and the similarity is used).
+MIN_AFFINE_SPREAD = 0.05
+
+
+def _weighted_mean(points: np.ndarray, weights: np.ndarray, count: np.ndarray) -> np.ndarray:
+    total = np.einsum("nj,njk->nk", weights, np.nan_to_num(points))
+    return total / np.maximum(count, 1)[:, None]
+
+
+def fit_maps(
+    source: np.ndarray, target: np.ndarray, weights: np.ndarray, *, affine: bool = True
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Fit source-to-target maps ``x -> linear @ x + offset`` by weighted least squares.
+
+    Parameters
+    ----------
+    source, target
+        ``(N, K, 2) float64``, pixels: ``N`` pairs of configurations of ``K`` points
+        (NaN allowed where the weight is 0).
+    weights
+        ``(N, K) bool``: the points that take part in each fit.
+    affine
+        Fit affine maps where the points allow; ``False`` fits similarities at most.
+
+    Returns
+    -------
+    linear
+        ``(N, 2, 2) float64``.
+    offset
+        ``(N, 2) float64``, NaN where no point took part.
+    count
+        ``(N,) int64``: points in each fit (3 or more and well spread: affine; 2:
+        similarity; 1: translation).
+    """
+    w = weights.astype(np.float64)
+    count = weights.sum(axis=1)
+    src_mean = _weighted_mean(source, w, count)
+    dst_mean = _weighted_mean(target, w, count)
+    src = np.where(weights[..., None], source - src_mean[:, None], 0.0)
+    dst = np.where(weights[..., None], target - dst_mean[:, None], 0.0)
+
+    src_z = src[..., 0] + 1j * src[..., 1]
+    dst_z = dst[..., 0] + 1j * dst[..., 1]
+    spread = np.sum(np.abs(src_z) ** 2, axis=1)
+    rotation = np.sum(dst_z * np.conj(src_z), axis=1) / np.where(spread > 0, spread, 1.0)
+    rotation = np.where(count >= 2, rotation, 1.0)
+    linear = np.stack([np.stack([rotation.real, -rotation.imag], -1),
+                       np.stack([rotation.imag, rotation.real], -1)], axis=-2)
+
+    if affine:
+        src_cov = np.einsum("nki,nkj->nij", src, src)
+        cross = np.einsum("nki,nkj->nij", dst, src)
+        eig = np.linalg.eigvalsh(src_cov)
+        spread_ok = (count >= 3) & (eig[:, 0] > MIN_AFFINE_SPREAD * np.maximum(eig[:, 1], 1e-300))
+        safe_cov = np.where(spread_ok[:, None, None], src_cov, np.eye(2))
+        linear = np.where(spread_ok[:, None, None], cross @ np.linalg.inv(safe_cov), linear)
+
+    offset = dst_mean - np.einsum("nij,nj->ni", linear, src_mean)
+    return linear, np.where((count >= 1)[:, None], offset, np.nan), count
+
+
+def map_points(
+    source: np.ndarray,
+    target: np.ndarray,
+    weights: np.ndarray,
+    query: np.ndarray,
+    *,
+    affine: bool = True,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Fit source-to-target maps (see :func:`fit_maps`) and apply them to query points.
+
+    Parameters
+    ----------
+    source, target, weights, affine
+        As for :func:`fit_maps`.
+    query
+        ``(N, 2) float64``: a point of each source configuration to carry over.
+
+    Returns
+    -------
+    mapped
+        ``(N, 2) float64``: each query point carried to its target configuration, NaN where
+        no point took part in the fit.
+    ok
+        ``(N,) bool``: a map could be fitted.
+    """
+    linear, offset, count = fit_maps(source, target, weights, affine=affine)
+    return np.einsum("nij,nj->ni", linear, query) + offset, count >= 1
