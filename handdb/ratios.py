@@ -35,12 +35,9 @@ from handdb.xray import SEGMENTS, read_xray
 #: Confidence level of the interval around each mean ratio.
 CONFIDENCE = 0.95
 
-#: Age bands in years, ``(label, lowest age, first age above the band)``.
-AGE_BANDS: tuple[tuple[str, float, float], ...] = (
-    ("0-17", 0.0, 18.0),
-    ("18-39", 18.0, 40.0),
-    ("40-59", 40.0, 60.0),
-    ("60+", 60.0, np.inf),
+#: Age bands, ``(label, lowest age in years)``; a band runs up to the next one's lowest.
+AGE_BANDS: tuple[tuple[str, float], ...] = (
+    ("0-17", 0.0), ("18-39", 18.0), ("40-59", 40.0), ("60+", 60.0),
 )
 
 #: The cohort of every image.
@@ -69,7 +66,7 @@ def table1_measurements() -> pa.Table:
 
 
 def relative_lengths(measurements: pa.Table, decimals: int | None = None) -> pa.Table:
-    """Each segment's length over its finger's total length, per image.
+    """Return each segment's length over its finger's total length, per image.
 
     Parameters
     ----------
@@ -83,14 +80,17 @@ def relative_lengths(measurements: pa.Table, decimals: int | None = None) -> pa.
     Returns
     -------
     pa.Table
-        The columns ``image_id, finger, segment, sex, age`` of ``measurements`` plus
-        ``total`` (the finger's length, the file's unit) and ``ratio`` (dimensionless).
+        The columns ``source_file, image_id, finger, segment, sex, age`` of
+        ``measurements`` plus ``total`` (the finger's length, the file's unit) and
+        ``ratio`` (dimensionless). Images are told apart by file and id.
     """
-    totals = measurements.group_by(["image_id", "finger"]).aggregate([("length", "sum")])
-    joined = measurements.join(totals, keys=["image_id", "finger"])
+    finger_keys = ["source_file", "image_id", "finger"]
+    totals = measurements.group_by(finger_keys).aggregate([("length", "sum")])
+    joined = measurements.join(totals, keys=finger_keys)
     total = joined.column("length_sum")
     ratio = pc.divide(joined.column("length"), total)
     return pa.table({
+        "source_file": joined.column("source_file"),
         "image_id": joined.column("image_id"),
         "finger": joined.column("finger"),
         "segment": joined.column("segment"),
@@ -102,9 +102,10 @@ def relative_lengths(measurements: pa.Table, decimals: int | None = None) -> pa.
 
 
 def _age_band(age: pa.ChunkedArray) -> pa.Array:
+    """Label of the :data:`AGE_BANDS` band of each age (years), null where none."""
     values = age.to_numpy(zero_copy_only=False).astype(float)
-    labels = np.array([label for label, _, _ in AGE_BANDS] + [None], dtype=object)
-    edges = np.array([low for _, low, _ in AGE_BANDS[1:]])
+    labels = np.array([label for label, _ in AGE_BANDS] + [None], dtype=object)
+    edges = np.array([low for _, low in AGE_BANDS[1:]])
     band = np.where(np.isnan(values), len(AGE_BANDS), np.searchsorted(edges, values, "right"))
     return pa.array(labels[band], type=pa.string())
 
@@ -121,7 +122,7 @@ def _cohort_rows(relative: pa.Table) -> pa.Table:
 
 
 def joint_ratios(measurements: pa.Table, decimals: int | None = PAPER_DECIMALS) -> pa.Table:
-    """Statistics of the relative segment lengths per cohort, finger and segment.
+    """Compute the statistics of relative segment lengths per cohort, finger and segment.
 
     Parameters
     ----------

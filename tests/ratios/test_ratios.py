@@ -2,6 +2,7 @@ import math
 from pathlib import Path
 
 import numpy as np
+import pyarrow as pa
 import pyarrow.compute as pc
 import pytest
 from scipy import stats
@@ -124,3 +125,15 @@ def test_place_joints_refuses_a_bad_total(table1, total):
 def test_place_joints_names_a_missing_cohort(table1):
     with pytest.raises(KeyError, match="sex:f"):
         place_joints("index", 1.0, joint_ratios(table1), cohort="sex:f")
+
+
+def test_images_of_different_files_are_kept_apart(tmp_path: Path):
+    paths = []
+    for name, lengths in (("one", (50, 30, 20)), ("two", (40, 40, 20))):
+        path = tmp_path / f"{name}.xray.csv"
+        path.write_text("image_id,finger,segment,length\n" + "".join(
+            f"x1,index,J{k + 1},{v}\n" for k, v in enumerate(lengths)))
+        paths.append(path)
+    measurements = pa.concat_tables([read_xray(p)[0] for p in paths])
+    j1 = _row(joint_ratios(measurements), "index", "J1")
+    assert j1["n"] == 2 and j1["mean"] == pytest.approx(0.45)
