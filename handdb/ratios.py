@@ -20,6 +20,7 @@ The paper errs twice; :func:`paper_discrepancies` recomputes both from its Table
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cache
 from importlib import resources
 
 import numpy as np
@@ -56,6 +57,7 @@ SEGMENT_OF_ROLES: dict[tuple[str, str], str] = {
 }
 
 
+@cache
 def table1_measurements() -> pa.Table:
     """Return the paper's Table 1 (five right-hand images 1a-1e) as ``xray_measurements``."""
     with resources.as_file(resources.files("handdb") / "data" / TABLE1_RESOURCE) as path:
