@@ -11,11 +11,14 @@ positions alone do not fix; here it is fixed so that hinges stay hinges:
   hand and out of the back of a left one, and flexion has opposite signs for the two.
 * A joint with one child aims ``+Y`` at it. Its ``+X`` is the *hinge axis* of its finger:
   the normal of the finger's flexion plane (the plane through its MCP, the joints after
-  it and its tip), signed to agree with the palm's reference axis for that finger. When
-  the finger is nearly straight the plane is undefined and the axis blends into the
-  reference axis. A finger's reference axis is ``d x Z_palm`` (``d`` its base bone, fixed
-  in the palm): across the palm. The thumb's is the palm normal ``Z_palm``: its nail faces
-  sideways in a flat hand, so it bends across the palm, about an axis near the normal.
+  it and its tip), signed to agree with the palm's reference axis for that finger. The
+  plane normal is trusted when the finger is bent (by :data:`PLANE_BLEND_BEND` or more)
+  and the normal is within 75 degrees of the reference (:data:`PLANE_TRUSTED_COSINE`);
+  below either, the axis blends smoothly into the reference axis, so a straight finger,
+  or a tracker's finger bent sideways, cannot flip the axis and spin the frame. A finger's
+  reference axis is the palm's ``+X``, across the palm. The thumb's is the palm normal
+  ``Z_palm``: its nail faces sideways in a flat hand, so it bends across the palm, about
+  an axis near the normal.
   Because PIP, DIP and IP frames share the plane normal as ``+X``, a finger bending in
   its plane turns those joints about their local ``X`` only: no twist, no spin.
 * A leaf joint (a fingertip) keeps its parent's orientation.
@@ -48,6 +51,10 @@ from handdb.skeletons import FINGERS, Skeleton
 #: Below this bend (angle between consecutive finger bones), the flexion plane of a finger
 #: is blended towards the palm's reference axis: radians.
 PLANE_BLEND_BEND = np.deg2rad(5.0)
+
+#: Below this cosine between a finger's flexion-plane normal and its reference axis, the
+#: plane (then bent sideways, against anatomy) is blended towards the reference axis.
+PLANE_TRUSTED_COSINE = np.cos(np.deg2rad(75.0))
 
 #: Fingers whose MCPs define the palm frame, from the thumb side to the little side.
 PALM_FINGERS: tuple[str, ...] = ("index", "middle", "ring", "little")
@@ -185,16 +192,12 @@ def _finger_hinge_axes(
     xyz: np.ndarray, skeleton: Skeleton, palm: np.ndarray
 ) -> dict[str, np.ndarray]:
     """Hinge axis of every finger, ``finger -> (T, 3)`` unit vectors (see module doc)."""
-    palm_normal = palm[..., 2]
     axes = {}
     for finger in FINGERS:
         chain = skeleton.finger_chain(finger)
         if len(chain) == 0:
             continue
-        base_parent = skeleton.parents[chain[0]]
-        base_bone = xyz[:, chain[0]] - xyz[:, base_parent]
-        reference = (palm_normal if finger == "thumb"
-                     else _unit(np.cross(base_bone, palm_normal)))
+        reference = palm[..., 2] if finger == "thumb" else palm[..., 0]
         roles = [skeleton.roles[j] for j in chain]
         plane_joints = chain[roles.index("mcp"):] if "mcp" in roles else chain
         bones = np.diff(xyz[:, plane_joints], axis=1)
@@ -202,9 +205,11 @@ def _finger_hinge_axes(
         lengths = np.linalg.norm(bones, axis=-1)
         scale = (lengths[:, :-1] * lengths[:, 1:]).sum(axis=1)
         bend = np.linalg.norm(normal, axis=-1) / np.maximum(scale, _EPS)
-        sign = np.where(np.sum(normal * reference, axis=-1) < 0, -1.0, 1.0)
-        weight = np.clip(bend / np.sin(PLANE_BLEND_BEND), 0.0, 1.0)[:, None]
-        axes[finger] = _unit(weight * sign[:, None] * _unit(normal) + (1 - weight) * reference)
+        cosine = np.sum(_unit(normal) * reference, axis=-1)
+        weight = (np.clip(bend / np.sin(PLANE_BLEND_BEND), 0.0, 1.0)
+                  * np.clip(np.abs(cosine) / PLANE_TRUSTED_COSINE, 0.0, 1.0))[:, None]
+        signed_normal = np.where(cosine < 0, -1.0, 1.0)[:, None] * _unit(normal)
+        axes[finger] = _unit(weight * signed_normal + (1 - weight) * reference)
     return axes
 
 

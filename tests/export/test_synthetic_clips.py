@@ -18,7 +18,7 @@ from .usd_reading import joint_world_positions, open_skeleton
 
 #: Largest turn of a hinge about an axis other than its own: the synthetic fingers bend
 #: about slightly converging axes, and a nearly straight finger's axis is the palm's.
-HINGE_OFF_AXIS = np.deg2rad(2.5)
+HINGE_OFF_AXIS = np.deg2rad(1.0)
 
 
 @pytest.fixture(params=[("mediapipe21", "right"), ("thesis21", "left"), ("dhg22", "left")],
