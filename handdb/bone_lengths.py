@@ -27,6 +27,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 import pyarrow as pa
@@ -254,7 +255,8 @@ def clip_bone_lengths(clip: Clip, ratios: pa.Table | None = None, *,
     ledger = _Ledger(skeleton)
 
     given = np.array([spec.bone_lengths.get(j, np.nan) for j in skeleton.joints])
-    ledger.add("given", given, lambda j: f"bone_lengths in {spec.path}")
+    sidecar = Path(spec.path).name
+    ledger.add("given", given, lambda j: f"bone_lengths in {sidecar}")
     if clip.truth is not None:
         per_frame = frame_bone_lengths(clip.truth, skeleton)
         n_frames = np.isfinite(per_frame).sum(axis=0)
