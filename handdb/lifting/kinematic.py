@@ -33,7 +33,6 @@ import itertools
 from typing import Any
 
 import numpy as np
-from scipy.special import logsumexp
 
 from handdb.clip import Camera
 from handdb.lifting.geometry import (
@@ -56,6 +55,9 @@ from handdb.skeletons import Skeleton
 #: Every sign pattern of a finger's three bones, ``(8, 3)``; row ``k`` has bit ``b`` of
 #: ``k`` (most significant first) set where bone ``b`` is negative.
 SIGN_STATES = np.array(list(itertools.product((1.0, -1.0), repeat=CHAIN_BONES)))
+
+#: Columns summing a finger's state weights where bone 0, 1, 2 is positive, then all.
+_MARGINALS = np.concatenate([SIGN_STATES > 0, np.ones((len(SIGN_STATES), 1))], axis=1)
 
 #: The two signs a single bone can take, in the order of each bit of a state.
 BONE_SIGNS = np.array([1.0, -1.0])
@@ -183,12 +185,15 @@ def finger_log_likelihood(xy: np.ndarray, abs_dz: np.ndarray, palm_z: np.ndarray
         ``(T, 2, F, 8) float64``: the weak prior toward relaxed poses. It breaks ties but
         is no evidence about the clip-wide mirror, which is judged on ``anatomy`` alone.
     """
-    points = np.concatenate([np.broadcast_to(xy[:, None], palm_z.shape + (2,)),
-                             palm_z[..., None]], axis=-1)                # (T, 2, J, 3)
-    wrist = points[:, :, layout.wrist]
-    normal = HANDEDNESS[hand] * _unit(np.cross(points[:, :, layout.index_mcp] - wrist,
-                                               points[:, :, layout.little_mcp] - wrist))
-    forward = points[:, :, layout.chain_bases] - wrist[:, :, None]      # (T, 2, F, 3)
+    anchors = np.concatenate([[layout.wrist, layout.index_mcp, layout.little_mcp],
+                              layout.chain_bases])
+    z = palm_z[:, :, anchors]
+    points = np.stack([np.broadcast_to(xy[:, None, anchors, 0], z.shape),
+                       np.broadcast_to(xy[:, None, anchors, 1], z.shape), z], axis=-1)
+    wrist = points[:, :, 0]                                              # (T, 2, 3)
+    normal = HANDEDNESS[hand] * _unit(np.cross(points[:, :, 1] - wrist,
+                                               points[:, :, 2] - wrist))
+    forward = points[:, :, 3:] - wrist[:, :, None]                       # (T, 2, F, 3)
     forward = _unit(forward - np.sum(forward * normal[:, :, None], -1, keepdims=True)
                     * normal[:, :, None])
     bones_2d = bone_vectors_2d(xy, skeleton)[:, layout.chains]          # (T, F, 3, 2)
@@ -232,13 +237,15 @@ def bone_log_odds(log_likelihood: np.ndarray) -> np.ndarray:
     ``(..., 8)`` log-likelihoods in, ``(..., 3)`` log-odds out.
     """
     peak = np.max(log_likelihood, axis=-1, keepdims=True)
-    weight = np.exp(log_likelihood - peak).reshape(log_likelihood.shape[:-1] + (2, 2, 2))
-    positive = np.stack([weight[..., 0, :, :].sum(axis=(-2, -1)),
-                         weight[..., :, 0, :].sum(axis=(-2, -1)),
-                         weight[..., :, :, 0].sum(axis=(-2, -1))], axis=-1)
-    total = weight.sum(axis=(-3, -2, -1))[..., None]
+    mass = np.exp(log_likelihood - peak) @ _MARGINALS                  # (..., 4)
     with np.errstate(divide="ignore"):
-        return np.log(positive) - np.log(total - positive)
+        return np.log(mass[..., :3]) - np.log(mass[..., 3:] - mass[..., :3])
+
+
+def _log_evidence(log_likelihood: np.ndarray) -> np.ndarray:
+    """``log(sum(exp(.)))`` over the last axis, ``(..., 8)`` to ``(...)``."""
+    peak = np.max(log_likelihood, axis=-1)
+    return peak + np.log(np.exp(log_likelihood - peak[..., None]).sum(axis=-1))
 
 
 def _state_index(signs: np.ndarray) -> np.ndarray:
@@ -281,7 +288,7 @@ def resolve_signs(xy: np.ndarray, abs_dz: np.ndarray, bone_lengths: np.ndarray,
     anatomy, comfort = finger_log_likelihood(xy, abs_dz, palm_z, skeleton, layout, hand)
     log_lik = anatomy + comfort
 
-    evidence = logsumexp(log_lik, axis=-1).sum(axis=-1)                 # (T, 2)
+    evidence = _log_evidence(log_lik).sum(axis=-1)                      # (T, 2)
     tilt = np.sqrt(np.nanmean(abs_dz[:, layout.palm_bones] ** 2, axis=1, keepdims=True))
     floor = TEMPORAL_FLOOR * np.nanmean(bone_lengths[layout.palm_bones], keepdims=True)
     palm_odds = sign_posterior(evidence[:, :1] - evidence[:, 1:], flip_costs(tilt, floor))[:, 0]

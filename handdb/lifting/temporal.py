@@ -52,8 +52,18 @@ def flip_costs(magnitude: np.ndarray, floor: np.ndarray) -> np.ndarray:
     return cost
 
 
-def _normalised(matrices: np.ndarray) -> np.ndarray:
-    return matrices / np.max(matrices, axis=(-2, -1), keepdims=True)
+def _product(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """``a @ b`` for stacks of 2×2 matrices, rescaled to a largest entry of 1."""
+    out = np.empty(np.broadcast_shapes(a.shape, b.shape))
+    a0, a1 = a[..., 0, :], a[..., 1, :]
+    b0, b1 = b[..., :, 0], b[..., :, 1]
+    out[..., 0, 0] = a0[..., 0] * b0[..., 0] + a0[..., 1] * b0[..., 1]
+    out[..., 0, 1] = a0[..., 0] * b1[..., 0] + a0[..., 1] * b1[..., 1]
+    out[..., 1, 0] = a1[..., 0] * b0[..., 0] + a1[..., 1] * b0[..., 1]
+    out[..., 1, 1] = a1[..., 0] * b1[..., 0] + a1[..., 1] * b1[..., 1]
+    peak = np.maximum(np.maximum(out[..., 0, 0], out[..., 0, 1]),
+                      np.maximum(out[..., 1, 0], out[..., 1, 1]))
+    return out / peak[..., None, None]
 
 
 def _prefix_products(matrices: np.ndarray) -> np.ndarray:
@@ -61,12 +71,11 @@ def _prefix_products(matrices: np.ndarray) -> np.ndarray:
     n = len(matrices)
     if n == 1:
         return matrices
-    pairs = _normalised(matrices[0 : n - 1 : 2] @ matrices[1:n:2])
-    odd = _prefix_products(pairs)
+    odd = _prefix_products(_product(matrices[0 : n - 1 : 2], matrices[1:n:2]))
     out = np.empty_like(matrices)
     out[0] = matrices[0]
     out[1::2] = odd
-    out[2::2] = _normalised(odd[: (n - 1) // 2] @ matrices[2::2])
+    out[2::2] = _product(odd[: (n - 1) // 2], matrices[2::2])
     return out
 
 
@@ -95,8 +104,9 @@ def sign_posterior(log_odds: np.ndarray, flip_cost: np.ndarray) -> np.ndarray:
     log_trans = np.stack([np.stack([np.zeros_like(flip), flip], -1),
                           np.stack([flip, np.zeros_like(flip)], -1)], -2)  # (T, K, 2, 2)
     log_step = log_trans + emission[..., None, :]
-    step = np.exp(log_step - np.max(log_step, axis=(-2, -1), keepdims=True))
-    start = np.exp(emission[0] - np.max(emission[0], axis=-1, keepdims=True))
+    peak = np.abs(half)[..., None, None]            # the largest entry of each step
+    step = np.exp(log_step - peak)
+    start = np.exp(emission[0] - np.abs(half[0])[..., None])
     forward = np.empty(emission.shape)
     forward[0] = start
     backward = np.ones(emission.shape)
