@@ -14,7 +14,7 @@ Bad input is refused as precisely as possible and the rest goes on. A bad row (b
 number, unknown finger or segment, duplicate) is refused alone; an image whose finger
 then lacks a segment, or holds a duplicated or conflicting one, is quarantined for that
 finger only, since its ratios would be wrong. A file that cannot be read as such a table
-at all (empty, not UTF-8, missing or unknown columns) raises :class:`InputError`.
+at all (empty, not UTF-8, missing or unknown columns) is refused whole.
 """
 
 from __future__ import annotations
@@ -210,16 +210,16 @@ def read_xray(path: str | Path) -> tuple[pa.Table, list[InputError]]:
         (image, finger), ``length`` in the file's unit, ``source_file`` the file's name.
     refused
         One :class:`InputError` per refused row and per quarantined (image, finger),
-        each naming the file, the 1-based line and the field.
-
-    Raises
-    ------
-    InputError
-        When the file cannot be read as an X-ray table at all: not UTF-8, empty, no
-        measurements, or a header lacking a required column or naming an unknown one.
+        each naming the file, the 1-based line and the field; or the one error that
+        refuses the whole file (not UTF-8, empty, no measurements, or a header lacking
+        a required column or naming an unknown one), the table then being empty. Bad
+        input never raises, so a caller quarantines what is listed and goes on.
     """
     file = str(path)
-    records = _read_records(Path(path))
+    try:
+        records = _read_records(Path(path))
+    except InputError as error:
+        return tables.empty("xray_measurements"), [error]
     rows: list[_Row] = []
     errors: list[InputError] = []
     refused: dict[tuple[str, str], list[int]] = defaultdict(list)

@@ -87,11 +87,12 @@ def test_conflicting_metadata_quarantines_the_image(tmp_path):
     ("image_id,finger,segment,length,colour\nx1,index,J1,3,red\n", "colour"),
     (HEADER, None),
 ])
-def test_unreadable_files_raise(tmp_path, text, field):
-    with pytest.raises(InputError) as info:
-        read_xray(_write(tmp_path, text))
-    assert info.value.field == field
-    assert info.value.file.endswith("hands.xray.csv")
+def test_unreadable_files_are_refused_whole(tmp_path, text, field):
+    table, refused = read_xray(_write(tmp_path, text))
+    assert table.num_rows == 0
+    assert len(refused) == 1 and isinstance(refused[0], InputError)
+    assert refused[0].field == field
+    assert refused[0].file.endswith("hands.xray.csv")
 
 
 def test_short_row_is_refused(tmp_path):
