@@ -29,7 +29,14 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from handdb.errors import StageError
-from handdb.rotations import CAMERA_TO_Y_UP, JointMotion, joint_rotations, rest_pose, turn_root
+from handdb.rotations import (
+    CAMERA_TO_Y_UP,
+    JointMotion,
+    child_counts,
+    joint_rotations,
+    rest_pose,
+    turn_root,
+)
 from handdb.skeletons import Skeleton
 
 #: Intrinsic Euler order of the rotation channels (scipy's upper-case notation).
@@ -56,9 +63,8 @@ def depth_first_order(skeleton: Skeleton) -> list[int]:
 
 def _has_position_channels(skeleton: Skeleton) -> np.ndarray:
     """``(J,) bool``: the root and every child of a joint with several children."""
-    n_children = np.bincount(skeleton.parents[skeleton.parents >= 0], minlength=skeleton.n_joints)
     parents = skeleton.parents
-    return (parents < 0) | (n_children[np.maximum(parents, 0)] > 1)
+    return (parents < 0) | (child_counts(skeleton)[np.maximum(parents, 0)] > 1)
 
 
 def _hierarchy(skeleton: Skeleton, offsets: np.ndarray, bone_lengths: np.ndarray) -> str:

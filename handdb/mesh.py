@@ -18,7 +18,13 @@ from dataclasses import dataclass
 import numpy as np
 import trimesh
 
-from handdb.rotations import joint_rotations, rest_pose, rest_positions, world_transforms
+from handdb.rotations import (
+    child_counts,
+    joint_rotations,
+    rest_pose,
+    rest_positions,
+    world_transforms,
+)
 from handdb.skeletons import Skeleton
 
 #: Joint influences per vertex.
@@ -74,8 +80,7 @@ class HandMesh:
 
 def _capsule_bones(skeleton: Skeleton) -> np.ndarray:
     """Bones ``(B', 2)`` (parent, child) whose parent joint has exactly one child."""
-    n_children = np.bincount(skeleton.parents[skeleton.parents >= 0], minlength=skeleton.n_joints)
-    return skeleton.bones[n_children[skeleton.bones[:, 0]] == 1]
+    return skeleton.bones[child_counts(skeleton)[skeleton.bones[:, 0]] == 1]
 
 
 def _finger_radii(skeleton: Skeleton, bone_lengths: np.ndarray, bones: np.ndarray) -> dict:

@@ -132,6 +132,11 @@ def bone_length_array(skeleton: Skeleton, bone_lengths: dict[str, float]) -> np.
     return lengths
 
 
+def child_counts(skeleton: Skeleton) -> np.ndarray:
+    """Count the children of each joint: ``(J,) int64``."""
+    return np.bincount(skeleton.parents[skeleton.parents >= 0], minlength=skeleton.n_joints)
+
+
 def _unit(v: np.ndarray) -> np.ndarray:
     return v / np.maximum(np.linalg.norm(v, axis=-1, keepdims=True), _EPS)
 
@@ -285,7 +290,7 @@ def joint_rotations(xyz: np.ndarray, skeleton: Skeleton, bone_lengths: np.ndarra
 
     translations = np.zeros(xyz.shape)
     translations[:, root] = xyz[:, root]
-    n_children = np.bincount(parents[has_parent], minlength=skeleton.n_joints)
+    n_children = child_counts(skeleton)
     for parent, child in skeleton.bones:
         if n_children[parent] == 1:
             translations[:, child, 1] = bone_lengths[child]
