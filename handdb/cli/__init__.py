@@ -7,6 +7,7 @@ Every command that touches a database takes ``--db`` (default ``./data/db`` or
 
 from __future__ import annotations
 
+import csv
 import json
 import sys
 from enum import Enum
@@ -88,12 +89,13 @@ def print_summary(summary) -> None:
         f"[bold]built[/] {summary.db}: {summary.n_clips} clips in the inbox, "
         f"{len(summary.processed)} processed, {len(summary.unchanged)} unchanged, "
         f"{len(summary.refusals)} refused, {len(summary.failed)} failed "
-        f"({sum(summary.timings.values()):.1f} s)"
+        f"({sum(summary.timings.values()):.1f} s)",
+        soft_wrap=True,
     )
     for refusal in summary.refusals:
-        console.print(f"  [yellow]quarantined[/] {refusal}")
+        console.print(f"  [yellow]quarantined[/] {refusal}", soft_wrap=True)
     for clip_id, error in summary.failed.items():
-        console.print(f"  [red]failed[/] {clip_id}: {error}")
+        console.print(f"  [red]failed[/] {clip_id}: {error}", soft_wrap=True)
 
 
 @app.command()
@@ -146,9 +148,10 @@ def sql(
         console.print(f"[red]SQL error:[/] {exc}")
         raise typer.Exit(EXIT_FAILED) from None
     if format is OutputFormat.csv:
-        import pyarrow.csv as pacsv
-
-        pacsv.write_csv(result, sys.stdout.buffer)
+        writer = csv.writer(sys.stdout, lineterminator="\n")
+        writer.writerow(result.column_names)
+        for batch in result.to_batches():
+            writer.writerows(zip(*(column.to_pylist() for column in batch.columns), strict=True))
     elif format is OutputFormat.json:
         out.print_json(json.dumps(result.to_pylist(), default=str))
     else:

@@ -1,0 +1,77 @@
+"""The command line on a real database: sql output formats, help, exit statuses."""
+
+import csv
+import io
+import json
+
+import pytest
+from typer.testing import CliRunner
+
+from handdb import tables
+from handdb.cli import EXIT_QUARANTINED, app
+from handdb.store import Store
+
+runner = CliRunner()
+
+
+@pytest.fixture
+def db(tmp_path):
+    store = Store(str(tmp_path / "db"))
+    store.write("truth_3d", "a", tables.from_columns("truth_3d", {
+        "clip_id": "a", "frame": [0, 1, 2], "joint": ["wrist"] * 3, "joint_index": [0] * 3,
+        "x": [1.5, 2.5, 3.5], "y": [0.0] * 3, "z": [10.0] * 3}))
+    return str(tmp_path / "db")
+
+
+def test_sql_csv_is_a_header_then_rows(db):
+    result = runner.invoke(app, ["sql", "--db", db, "--format", "csv",
+                                 "SELECT frame, x FROM truth_3d ORDER BY frame"])
+    assert result.exit_code == 0, result.output
+    rows = list(csv.reader(io.StringIO(result.stdout)))
+    assert rows == [["frame", "x"], ["0", "1.5"], ["1", "2.5"], ["2", "3.5"]]
+
+
+def test_sql_json_and_table(db):
+    result = runner.invoke(app, ["sql", "--db", db, "-f", "json",
+                                 "SELECT sum(x) AS total FROM truth_3d"])
+    assert json.loads(result.stdout) == [{"total": 7.5}]
+    result = runner.invoke(app, ["sql", "--db", db, "SELECT count(*) AS n FROM truth_3d"])
+    assert result.exit_code == 0 and "3" in result.stdout and "n" in result.stdout
+
+
+def test_sql_reads_the_database_from_the_environment(db):
+    result = runner.invoke(app, ["sql", "-f", "csv", "SELECT count(*) AS n FROM truth_3d"],
+                           env={"HANDDB_DB": db})
+    assert result.stdout.splitlines() == ["n", "3"]
+
+
+def test_sql_error_is_reported_not_raised(db):
+    result = runner.invoke(app, ["sql", "--db", db, "SELECT nope FROM truth_3d"])
+    assert result.exit_code == 1
+    assert "SQL error" in result.output and "nope" in result.output
+
+
+@pytest.mark.parametrize("command", [[], ["build"], ["sql"], ["serve"], ["demo"],
+                                     ["ratios", "place"], ["export-usd"], ["export-bvh"]])
+def test_every_command_explains_itself(command):
+    result = runner.invoke(app, [*command, "--help"])
+    assert result.exit_code == 0
+    assert "Usage" in result.output and len(result.output.splitlines()) > 5
+
+
+def test_serve_needs_exactly_one_schedule():
+    result = runner.invoke(app, ["serve"])
+    assert result.exit_code == 2 and "exactly one" in result.output
+
+
+def test_build_exit_status_when_input_is_quarantined(tmp_path, write_clip):
+    inbox = tmp_path / "inbox"
+    inbox.mkdir()
+    write_clip(inbox, "good", seed=1)
+    write_clip(inbox, "bad", seed=2)
+    (inbox / "bad.clip.json").write_text('{"skeleton": "no-such-skeleton"}')
+    result = runner.invoke(app, ["build", "--inbox", str(inbox), "--db", str(tmp_path / "db"),
+                                 "--no-usd"])
+    assert result.exit_code == EXIT_QUARANTINED, result.output
+    assert "quarantined" in result.output and "bad.clip.json" in result.output
+    assert "1 processed" in result.output
