@@ -325,6 +325,31 @@ def resolve_signs(xy: np.ndarray, abs_dz: np.ndarray, bone_lengths: np.ndarray,
     return signs, np.clip(confidence, 0.5, 1.0), mirror_log_odds
 
 
+def _lift_pinhole(uv: np.ndarray, skeleton: Skeleton, bone_lengths: np.ndarray,
+                  camera: Camera, hand: str, weak_scale: np.ndarray,
+                  weak_dz: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, float]:
+    """Two perspective walks, the signs settled again between them on metric ``(x, y)``.
+
+    The first walk, seeded by the weak-perspective signs, gives every joint its metric
+    image-plane position, free of the weak-perspective distortion of a near hand; the
+    signs are then settled again on those positions and the joints walked once more.
+
+    Returns
+    -------
+    xyz, inconsistency, confidence, mirror_log_odds
+        As :func:`walk_rays` and :func:`resolve_signs`.
+    """
+    xyz, _ = lift_perspective(uv, skeleton, bone_lengths, camera, weak_dz, weak_scale)
+    metric_xy = xyz[..., :2] - xyz[:, skeleton.root : skeleton.root + 1, :2]
+    abs_dz, _ = depth_magnitudes(projected_lengths(metric_xy, skeleton), bone_lengths,
+                                 np.ones(len(xyz)))
+    signs, confidence, mirror_log_odds = resolve_signs(metric_xy, abs_dz, bone_lengths,
+                                                       skeleton, hand)
+    xyz, inconsistency = lift_perspective(uv, skeleton, bone_lengths, camera,
+                                          signs * abs_dz, weak_scale)
+    return xyz, inconsistency, confidence, mirror_log_odds
+
+
 def lift_kinematic(uv: np.ndarray, skeleton: Skeleton, bone_lengths: np.ndarray,
                    camera: Camera, *, hand: str) -> LiftResult:
     """Lift with the hand prior; see the module docstring.
@@ -337,17 +362,17 @@ def lift_kinematic(uv: np.ndarray, skeleton: Skeleton, bone_lengths: np.ndarray,
     abs_dz, inconsistency = depth_magnitudes(projected, bone_lengths, scale)
     xy = image / scale[:, None, None]
     signs, confidence, mirror_log_odds = resolve_signs(xy, abs_dz, bone_lengths, skeleton, hand)
-    ambiguous = mirror_log_odds < np.log(MIRROR_SETTLED_ODDS)
-    note = (f"clip-wide mirror not settled: the chosen depth signs are only "
-            f"{np.exp(mirror_log_odds):.3g} times as likely as all of them flipped"
-            if ambiguous else "")
     if camera.model == "pinhole":
-        xyz, inconsistency = lift_perspective(uv, skeleton, bone_lengths, camera,
-                                              signs * abs_dz, scale)
+        xyz, inconsistency, confidence, mirror_log_odds = _lift_pinhole(
+            uv, skeleton, bone_lengths, camera, hand, scale, signs * abs_dz)
         scale = np.full(scale.shape, np.nan)
     else:
         xyz = orthographic_points(image, scale, accumulate_depths(signs * abs_dz, skeleton))
     inconsistency[:, skeleton.root] = 0.0
+    ambiguous = mirror_log_odds < np.log(MIRROR_SETTLED_ODDS)
+    note = (f"clip-wide mirror not settled: the chosen depth signs are only "
+            f"{np.exp(mirror_log_odds):.3g} times as likely as all of them flipped"
+            if ambiguous else "")
     return LiftResult(xyz=xyz, sign_confidence=confidence,
                       length_inconsistency=inconsistency, scale=scale, method="kinematic",
                       mirror_ambiguous=bool(ambiguous), note=note)

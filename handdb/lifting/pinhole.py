@@ -9,7 +9,7 @@ negative discriminant (the ray passes farther than ``l`` from ``P``) is clamped:
 joint goes to the ray's point nearest ``P`` and the excess distance is recorded.
 
 The root's depth is the largest for which every bone has a real solution (the perspective
-form of eq. 6), found per frame by bisection and then made robust and smooth over time like
+form of eq. 6), found per frame by a grid search and bisection and then made robust and smooth over time like
 the orthographic scale.
 """
 
@@ -21,14 +21,19 @@ from handdb.clip import Camera
 from handdb.lifting.temporal import smooth_scale
 from handdb.skeletons import Skeleton
 
-#: Bisection brackets the root depth within these factors of the weak-perspective guess.
-DEPTH_BRACKET = (0.25, 4.0)
+#: The root depth is searched within these factors of the weak-perspective guess.
+DEPTH_BRACKET = (0.5, 3.0)
 
-#: Bisection steps on log depth (each halves the bracket).
-BISECTION_STEPS = 30
+#: Candidate root depths tried per frame, on a geometric grid across the bracket.
+DEPTH_GRID = 48
 
-#: Relative tolerance on a bone's length below which a clamped discriminant counts as real.
-FEASIBLE_TOLERANCE = 1e-9
+#: Bisection steps refining the deepest feasible candidate (each halves a grid step).
+BISECTION_STEPS = 12
+
+#: A root depth counts as feasible while the bones' total excess (see :func:`walk_rays`)
+#: stays below this share of their total length: near the true depth the exactly feasible
+#: depths form narrow islands, so a strict test would stop short of them.
+EXCESS_TOLERANCE = 0.01
 
 
 def camera_rays(uv: np.ndarray, camera: Camera) -> np.ndarray:
@@ -87,26 +92,46 @@ def deepest_feasible_root(rays: np.ndarray, guess: np.ndarray, skeleton: Skeleto
                           bone_lengths: np.ndarray, bone_dz: np.ndarray) -> np.ndarray:
     """Largest root depth per frame at which every bone has a real solution.
 
+    The feasible depths need not form one interval (a chain can lose and regain a real
+    solution as the root moves), so candidates on a geometric grid are all tried and the
+    deepest feasible one is refined by bisection toward the next, infeasible, candidate.
+
     Parameters
     ----------
+    rays
+        ``(T, J, 3) float64`` from :func:`camera_rays`.
     guess
         ``(T,) float64``, clip units: a first guess (weak perspective); the answer is
         searched within :data:`DEPTH_BRACKET` of it.
+    skeleton, bone_lengths, bone_dz
+        As :func:`walk_rays`.
 
     Returns
     -------
     numpy.ndarray
         ``(T,) float64``, clip units.
     """
-    low = np.log(guess * DEPTH_BRACKET[0])
-    high = np.log(guess * DEPTH_BRACKET[1])
-    tolerance = FEASIBLE_TOLERANCE * np.nanmax(bone_lengths)
+    tolerance = EXCESS_TOLERANCE * np.nansum(bone_lengths)
+    n_frames = len(rays)
+    steps = np.linspace(np.log(DEPTH_BRACKET[0]), np.log(DEPTH_BRACKET[1]), DEPTH_GRID)
+    candidates = np.log(guess)[None, :] + steps[:, None]                  # (G, T)
+
+    def feasible(log_depth: np.ndarray) -> np.ndarray:
+        grid = log_depth.reshape(-1, n_frames)
+        tiled = np.broadcast_to(rays, (len(grid),) + rays.shape).reshape(-1, *rays.shape[1:])
+        dz = np.broadcast_to(bone_dz, (len(grid),) + bone_dz.shape).reshape(-1, rays.shape[1])
+        _, excess = walk_rays(tiled, np.exp(grid.ravel()), skeleton, bone_lengths, dz)
+        return (np.nansum(excess, axis=1) <= tolerance).reshape(log_depth.shape)
+
+    ok = feasible(candidates)
+    deepest = np.where(ok.any(axis=0), DEPTH_GRID - 1 - np.argmax(ok[::-1], axis=0), 0)
+    low = candidates[deepest, np.arange(n_frames)]
+    high = low + (steps[1] - steps[0])
     for _ in range(BISECTION_STEPS):
         middle = 0.5 * (low + high)
-        _, excess = walk_rays(rays, np.exp(middle), skeleton, bone_lengths, bone_dz)
-        feasible = np.nanmax(excess, axis=1) <= tolerance
-        low = np.where(feasible, middle, low)
-        high = np.where(feasible, high, middle)
+        good = feasible(middle[None])[0]
+        low = np.where(good, middle, low)
+        high = np.where(good, high, middle)
     return np.exp(low)
 
 
