@@ -8,9 +8,14 @@ methods use the frames after a gap too; ``auto``, the default, combines them per
 from handdb.gapfill import auto, interpolate, lowrank, rigid, thesis  # noqa: F401  (registers)
 from handdb.gapfill.registry import (
     DEFAULT_METHOD,
+    LEADING,
     METHODS,
     OFFLINE,
+    SHORT_HISTORY,
     THESIS,
+    TRAILING,
+    UNFILLED,
+    WHOLE_CLIP,
     FillResult,
     GapFlag,
     UnknownMethodError,
@@ -21,8 +26,13 @@ from handdb.gapfill.registry import (
 __all__ = [
     "DEFAULT_METHOD",
     "METHODS",
+    "LEADING",
     "OFFLINE",
+    "SHORT_HISTORY",
     "THESIS",
+    "TRAILING",
+    "UNFILLED",
+    "WHOLE_CLIP",
     "FillResult",
     "GapFlag",
     "UnknownMethodError",

@@ -13,7 +13,8 @@
    that joint's own observed frames hidden on purpose (:func:`validation_mask`): each gets
    the other's share of the squared validation error. ``long_gaps`` picks ``"chain"``,
    ``"lowrank"`` or their plain mean (``"ensemble"``) instead.
-5. Joints never observed: the rest pose fitted to the observed joints of each frame.
+5. Joints never observed are placed first, by the rest pose fitted to the observed joints
+   of each frame, so that the other joints can lean on them.
 6. Kinematic refinement (:mod:`handdb.gapfill.refine`): filled points are pulled back
    where they would stretch a bone beyond its length.
 
@@ -138,17 +139,21 @@ def fill_auto(
             f"long_gaps must be one of {', '.join(LONG_GAP_RULES)}; got '{long_gaps}'"
         )
     gaps = find_gaps(missing)
+    never_seen = np.unique(gaps.joint[gaps.whole_clip])
+    placed = place_from_rest_pose(uv, missing, skeleton, never_seen) if never_seen.size else uv
+    unknown = missing.copy()
+    unknown[:, never_seen] = False
     motion = palm_motion(uv, missing, skeleton)
-    local = uv if motion is None else to_palm_frame(uv, motion)
+    local = placed if motion is None else to_palm_frame(placed, motion)
 
     palm = palm_joints(skeleton)[gaps.joint]
     short = gaps.interior & (gaps.length <= short_gap)
     partial = ~gaps.whole_clip
     by_model = partial & ~palm & ~short
 
-    filled = interpolate_gaps(local, missing, "pchip")
+    filled = interpolate_gaps(local, unknown, "pchip")
     if by_model.any():
-        filled = _long_gap_fill(local, filled, missing, gaps.select(by_model), skeleton,
+        filled = _long_gap_fill(local, filled, unknown, gaps.select(by_model), skeleton,
                                 long_gaps, variance)
     if motion is not None:
         filled = to_image(filled, motion)
@@ -158,9 +163,6 @@ def fill_auto(
                          (long_gaps, by_model), ("rest-pose", gaps.whole_clip)):
         _, frame, joint = gaps.select(chosen).frames()
         labels[frame, joint] = rule
-    never_seen = np.unique(gaps.joint[gaps.whole_clip])
-    if never_seen.size:
-        filled = place_from_rest_pose(filled, missing, skeleton, never_seen)
     refined = refine_bone_lengths(filled, missing, skeleton, bone_lengths=bone_lengths,
                                   scale=scale)
     return MethodOutput(refined, labels=labels)

@@ -3,7 +3,8 @@
 The palm points (:func:`~handdb.gapfill.rigid.palm_joints`) move nearly as one rigid body,
 which an orthographic camera shows as a 2D affine map per frame. :func:`palm_motion` finds
 that map for every frame: it fits the observed palm points to a reference palm (the median
-palm shape, found by aligning every frame to the rest pose, then to that median), and
+palm shape of the frames that show the whole palm, found by aligning them to the rest pose,
+then to that median), and
 interpolates the map's six parameters over time in frames with fewer than three palm points.
 Expressed in the palm frame (:func:`to_palm_frame`), palm points stand still and finger
 points move only as the fingers bend: gaps there are far easier to bridge.
@@ -78,12 +79,14 @@ def palm_motion(uv: np.ndarray, missing: np.ndarray, skeleton: Skeleton) -> Palm
     fitted = palm_seen.sum(axis=1) >= MIN_PALM_POINTS
     if not fitted.any():
         return None
+    complete = palm_seen.sum(axis=1) == palm.sum()
+    shaping = complete if complete.any() else fitted
     reference = rest_pose_2d(skeleton)
     for _ in range(2):
         linear, offset, _ = _fit_to(reference, uv, palm_seen)
         inverse = np.linalg.inv(np.where(fitted[:, None, None], linear, np.eye(2)))
         canonical = np.einsum("tij,tkj->tki", inverse, np.nan_to_num(uv) - offset[:, None])
-        canonical = np.where((palm_seen & fitted[:, None])[..., None], canonical, np.nan)
+        canonical = np.where((palm_seen & shaping[:, None])[..., None], canonical, np.nan)
         seen_once = ~np.isnan(canonical[..., 0]).all(axis=0)
         reference = np.where(seen_once[:, None], np.nanmedian(
             np.where(seen_once[None, :, None], canonical, 0.0), axis=0), reference)

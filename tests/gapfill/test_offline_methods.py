@@ -1,0 +1,122 @@
+import numpy as np
+import pytest
+
+from handdb.gapfill import METHODS, UNFILLED, fill_gaps
+from handdb.gapfill.interpolate import interpolate_gaps
+from handdb.gapfill.lowrank import lowrank_reconstruct
+from handdb.gapfill.refine import refine_bone_lengths
+from handdb.gapfill.rigid import palm_joints
+
+
+def _hide(n_frames, n_joints, gaps):
+    observed = np.ones((n_frames, n_joints), dtype=bool)
+    for joint, start, stop in gaps:
+        observed[start:stop, joint] = False
+    return observed
+
+
+def _polynomial_tracks(degree, n_frames=60, n_joints=3):
+    t = np.linspace(-1, 1, n_frames)
+    rng = np.random.default_rng(degree)
+    coefficients = rng.normal(size=(degree + 1, n_joints, 2)) * 50
+    return np.einsum("d t, d j k -> t j k", np.vander(t, degree + 1).T, coefficients)
+
+
+@pytest.mark.parametrize(("kind", "degree"), [("linear", 1), ("pchip", 1), ("cubic", 3)])
+def test_interpolation_reproduces_its_polynomials(kind, degree):
+    uv = _polynomial_tracks(degree)
+    missing = ~_hide(60, 3, [(0, 10, 25), (1, 40, 41), (2, 5, 50)])
+    filled = interpolate_gaps(np.where(missing[..., None], np.nan, uv), missing, kind)
+    assert np.allclose(filled, uv, atol=1e-9)
+
+
+def test_linear_interpolation_does_not_reproduce_a_cubic():
+    uv = _polynomial_tracks(3)
+    missing = ~_hide(60, 3, [(0, 10, 25)])
+    filled = interpolate_gaps(np.where(missing[..., None], np.nan, uv), missing, "linear")
+    assert np.abs(filled - uv).max() > 1.0
+
+
+def test_max_gap_leaves_longer_gaps_unfilled_and_flagged(mediapipe):
+    uv = np.tile(np.arange(30.0)[:, None, None], (1, mediapipe.n_joints, 2))
+    observed = _hide(30, mediapipe.n_joints, [(5, 2, 5), (6, 10, 25)])
+    result = fill_gaps(uv, observed, mediapipe, "pchip", max_gap=5)
+    assert result.filled[2:5, 5].all() and not result.filled[10:25, 6].any()
+    assert np.isnan(result.uv[10:25, 6]).all()
+    assert [(f.joint, f.start, f.stop) for f in result.flags_of(UNFILLED)] == [
+        ("index_pip", 10, 25)]
+
+
+def test_lowrank_recovers_a_low_rank_signal():
+    rng = np.random.default_rng(4)
+    t = np.arange(300) / 30
+    latent = np.stack([np.sin(2.1 * t), np.cos(3.3 * t + 1), np.sin(0.7 * t) ** 3], axis=1)
+    uv = (latent @ rng.normal(size=(3, 20 * 2)) * 40 + 200).reshape(300, 20, 2)
+    observed = _hide(300, 20, [(j, 20 + 11 * j, 60 + 11 * j) for j in range(0, 20, 2)])
+    missing = ~observed
+    hidden = np.where(missing[..., None], np.nan, uv)
+    model = lowrank_reconstruct(hidden, missing)
+    linear = interpolate_gaps(hidden, missing, "linear")
+    lowrank_error = np.abs(model - uv)[missing].max()
+    linear_error = np.abs(linear - uv)[missing].max()
+    assert lowrank_error < 0.5
+    assert lowrank_error < linear_error / 20
+
+
+def test_rigid_fill_recovers_a_point_moving_with_the_palm(rapid_clip, mediapipe):
+    n_frames = 80
+    rest = rapid_clip.uv[0]
+    angle = np.linspace(0, 1.2, n_frames)
+    rotation = np.stack([np.stack([np.cos(angle), -np.sin(angle)], -1),
+                         np.stack([np.sin(angle), np.cos(angle)], -1)], -2)
+    stretch = np.array([[1.0, 0.0], [0.0, 0.7]])                  # the palm tilts away
+    uv = np.einsum("tij,jk,nk->tni", rotation, stretch, rest - rest[0]) + np.linspace(
+        0, 90, n_frames)[:, None, None]
+    j = mediapipe.index("ring_mcp")
+    assert palm_joints(mediapipe)[j]
+    observed = _hide(n_frames, mediapipe.n_joints, [(j, 20, 60)])
+    for method in ("rigid", "auto"):
+        filled = fill_gaps(uv, observed, mediapipe, method).uv
+        assert np.allclose(filled[20:60, j], uv[20:60, j], atol=1e-6), method
+
+
+def test_edges_and_a_never_seen_joint_are_filled_and_flagged(rapid_clip, mediapipe):
+    uv = rapid_clip.uv[:120]
+    tip, pip, wrist = (mediapipe.index(n) for n in ("index_tip", "middle_pip", "wrist"))
+    observed = _hide(120, mediapipe.n_joints, [(tip, 0, 30), (pip, 90, 120), (wrist, 0, 120)])
+    result = fill_gaps(uv, observed, mediapipe)
+    assert result.filled[~observed].all() and np.isfinite(result.uv).all()
+    kinds = {(f.joint, f.kind) for f in result.flags}
+    assert {("index_tip", "leading"), ("middle_pip", "trailing"), ("wrist", "whole_clip")} <= kinds
+    hand_size = np.ptp(uv[0], axis=0).max()
+    assert np.linalg.norm(result.uv[:, wrist] - uv[:, wrist], axis=-1).max() < hand_size / 2
+    assert set(result.fill_method[~observed]) <= {"rigid", "pchip", "validated", "rest-pose"}
+    assert (result.fill_method[:, wrist] == "rest-pose").all()
+
+
+@pytest.mark.parametrize("method", sorted(METHODS))
+def test_inputs_are_never_mutated(method, rapid_clip, mediapipe):
+    uv = rapid_clip.uv[:60].copy()
+    observed = _hide(60, mediapipe.n_joints, [(3, 0, 5), (8, 10, 30), (12, 50, 60)])
+    uv[~observed] = np.nan
+    uv_before, observed_before = uv.copy(), observed.copy()
+    result = fill_gaps(uv, observed, mediapipe, method)
+    assert np.array_equal(uv, uv_before, equal_nan=True)
+    assert np.array_equal(observed, observed_before)
+    assert np.array_equal(result.uv[observed], uv[observed])
+
+
+def test_refinement_pulls_a_filled_point_back_onto_its_bone(mediapipe):
+    uv = np.zeros((3, mediapipe.n_joints, 2))
+    uv[:, :, 1] = -np.arange(mediapipe.n_joints) * 10.0             # every bone 10 px or more
+    tip, dip = mediapipe.index("index_tip"), mediapipe.index("index_dip")
+    uv[:, tip] = uv[:, dip] + [0.0, -20.0]
+    missing = np.zeros((3, mediapipe.n_joints), dtype=bool)
+    missing[2, tip] = True
+    uv[2, tip] = uv[2, dip] + [0.0, -60.0]                         # filled three times too long
+    refined = refine_bone_lengths(uv, missing, mediapipe)
+    assert np.isclose(np.linalg.norm(refined[2, tip] - refined[2, dip]), 20.0 * 1.05)
+    assert np.array_equal(refined[~missing], uv[~missing])
+    bounded = refine_bone_lengths(uv, missing, mediapipe, bone_lengths={"index_tip": 4.0},
+                                  scale=2.5)
+    assert np.isclose(np.linalg.norm(bounded[2, tip] - bounded[2, dip]), 10.0)
