@@ -77,6 +77,15 @@ DIP_PIP_RATIO = 2.0 / 3.0
 #: Standard deviation of the DIP flexion about ``DIP_PIP_RATIO`` times the PIP's, degrees.
 COUPLING_SIGMA_DEG = 25.0
 
+#: How far a finger's joints may go to the back of the palm plane, as a share of the
+#: finger's first bone below the palm: about sin 30° for a hyperextended MCP; the thumb
+#: stays in front of the palm.
+FINGER_DORSAL_MARGIN = 0.5
+THUMB_DORSAL_MARGIN = 0.2
+
+#: Softness of that limit, as a share of the first bone.
+DORSAL_SOFTNESS = 0.1
+
 #: A weak prior toward relaxed poses: each joint's flexion ~ N(centre, sigma), degrees.
 #: It settles the frames where a finger fits either palm tilt, flexed a little or a lot.
 COMFORT_CENTRE_DEG = 15.0
@@ -163,7 +172,8 @@ def continuity_signs(tilt: np.ndarray) -> np.ndarray:
 
 
 def finger_log_likelihood(xy: np.ndarray, abs_dz: np.ndarray, palm_z: np.ndarray,
-                          skeleton: Skeleton, layout: HandLayout, hand: str) -> np.ndarray:
+                          bone_lengths: np.ndarray, skeleton: Skeleton, layout: HandLayout,
+                          hand: str) -> np.ndarray:
     """Log-likelihood of each finger's sign states under each palm state.
 
     Parameters
@@ -175,6 +185,10 @@ def finger_log_likelihood(xy: np.ndarray, abs_dz: np.ndarray, palm_z: np.ndarray
     palm_z
         ``(T, 2, J) float64``: depth of the palm joints relative to the root in palm state
         0 and its mirror, state 1 (other joints: ignored).
+    bone_lengths
+        ``(J,) float64``, clip units.
+    skeleton, layout, hand
+        The clip's skeleton, its palm and fingers, and which hand it is.
 
     Returns
     -------
@@ -194,6 +208,7 @@ def finger_log_likelihood(xy: np.ndarray, abs_dz: np.ndarray, palm_z: np.ndarray
     normal = HANDEDNESS[hand] * _unit(np.cross(points[:, :, 1] - wrist,
                                                points[:, :, 2] - wrist))
     forward = points[:, :, 3:] - wrist[:, :, None]                       # (T, 2, F, 3)
+    base_height = np.sum(forward * normal[:, :, None], axis=-1)          # (T, 2, F)
     forward = _unit(forward - np.sum(forward * normal[:, :, None], -1, keepdims=True)
                     * normal[:, :, None])
     bones_2d = bone_vectors_2d(xy, skeleton)[:, layout.chains]          # (T, F, 3, 2)
@@ -205,8 +220,9 @@ def finger_log_likelihood(xy: np.ndarray, abs_dz: np.ndarray, palm_z: np.ndarray
         return planar[..., None] + BONE_SIGNS * along_z[..., None]
 
     normal_f = np.broadcast_to(normal[:, :, None], forward.shape)
+    palmar = component(normal_f)
     # Each bone's angle in the finger plane depends on its own sign only: (..., bone, sign).
-    phi = np.arctan2(component(normal_f), component(forward))
+    phi = np.arctan2(palmar, component(forward))
     mcp = phi[..., 0, :, None, None]                                     # sign axes (1,2,3)
     pip = _wrap(phi[..., 1, None, :, None] - mcp)
     dip = _wrap(phi[..., 2, None, None, :] - phi[..., 1, None, :, None])
@@ -221,7 +237,14 @@ def finger_log_likelihood(xy: np.ndarray, abs_dz: np.ndarray, palm_z: np.ndarray
                 / softness) ** 2
 
     coupling = (dip - DIP_PIP_RATIO * pip) / np.radians(COUPLING_SIGMA_DEG)
-    cost = (outside(mcp, 0) + outside(pip, 1) + outside(dip, 2)
+    first_bone = bone_lengths[layout.chains[:, 0]][:, None, None, None]  # (F, 1, 1, 1)
+    margin = np.where(thumb, THUMB_DORSAL_MARGIN, FINGER_DORSAL_MARGIN) * first_bone
+    knuckle = base_height[..., None, None, None] + palmar[..., 0, :, None, None]
+    middle = knuckle + palmar[..., 1, None, :, None]
+    end = middle + palmar[..., 2, None, None, :]                         # heights over the palm
+    dorsal = sum((np.clip(-height - margin, 0.0, None) / (DORSAL_SOFTNESS * first_bone)) ** 2
+                 for height in (knuckle, middle, end))
+    cost = (outside(mcp, 0) + outside(pip, 1) + outside(dip, 2) + dorsal
             + np.where(thumb, 0.0, coupling**2))
     centre, spread = np.radians(COMFORT_CENTRE_DEG), np.radians(COMFORT_SIGMA_DEG)
     comfort = (((mcp - centre) / spread) ** 2 + ((pip - centre) / spread) ** 2
@@ -285,7 +308,8 @@ def resolve_signs(xy: np.ndarray, abs_dz: np.ndarray, bone_lengths: np.ndarray,
     palm_dz[:, layout.palm_bones] = palm * abs_dz[:, layout.palm_bones]
     palm_z0 = accumulate_depths(palm_dz, skeleton)
     palm_z = np.stack([palm_z0, -palm_z0], axis=1)
-    anatomy, comfort = finger_log_likelihood(xy, abs_dz, palm_z, skeleton, layout, hand)
+    anatomy, comfort = finger_log_likelihood(xy, abs_dz, palm_z, bone_lengths, skeleton,
+                                              layout, hand)
     log_lik = anatomy + comfort
 
     evidence = _log_evidence(log_lik).sum(axis=-1)                      # (T, 2)
