@@ -19,6 +19,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.ndimage import median_filter
 from scipy.optimize import least_squares
 from scipy.spatial.transform import Rotation, Slerp
 
@@ -40,6 +41,9 @@ SMOOTHNESS_WEIGHT = 0.16
 
 #: Weight λ of the pull towards the interpolated pose in the refinement of eq. 12.
 INTERPOLATION_WEIGHT = 0.16
+
+#: Frames in the running median of the filtering step of per-frame IK plus filtering.
+FILTER_FRAMES = 5
 
 #: Correspondences between model markers and observed markers in the marker term.
 CORRESPONDENCES = ("labelled", "nearest")
@@ -435,3 +439,34 @@ def refine_poses(model: HandModel, markers: np.ndarray, guesses: np.ndarray, *,
                  cutoff=cutoff)
         for observed, seen, guess in zip(markers, visible, guesses, strict=True)
     ])
+
+
+def filter_and_refine(model: HandModel, markers: np.ndarray, poses: np.ndarray, *,
+                      passes: int = 1, window: int = FILTER_FRAMES,
+                      weight: float = INTERPOLATION_WEIGHT,
+                      cutoff: float = MARKER_CUTOFF_MM) -> np.ndarray:
+    """Per-frame inverse kinematics plus filtering (the paper's PFIK+F post-processing).
+
+    Each pass low-passes the pose track (a running median over ``window`` frames of the
+    root position and joint angles, which also removes isolated wrong fits) and refits
+    every frame to its visible markers, pulled towards the filtered pose as in eq. 12.
+    Degrees of freedom no marker constrains thus follow their neighbours in time.
+
+    Parameters
+    ----------
+    markers
+        ``(T, J, 3)`` markers in mm, NaN where missing.
+    poses
+        ``(T, 33)`` fitted poses.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(T, 33)`` filtered and refined poses.
+    """
+    refined = np.asarray(poses, dtype=np.float64)
+    for _ in range(passes):
+        filtered = median_filter(refined, size=(window, 1), mode="nearest")
+        filtered[:, ROOT_ROTATION] = refined[:, ROOT_ROTATION]
+        refined = refine_poses(model, markers, filtered, weight=weight, cutoff=cutoff)
+    return refined

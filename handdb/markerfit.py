@@ -18,6 +18,7 @@ from handdb import tables
 from handdb.clip import METERS_PER_UNIT
 from handdb.fitting import (
     SwarmSettings,
+    filter_and_refine,
     initial_pose,
     interpolate_poses,
     refine_poses,
@@ -82,7 +83,8 @@ def key_frames(n_frames: int, step: int = KEY_STEP) -> np.ndarray:
 def fit_markers(markers: np.ndarray, *, hand: str = "right", units: str = "mm",
                 bone_lengths: dict[str, float] | None = None, solver: str = DEFAULT_SOLVER,
                 key_step: int = KEY_STEP, correspondence: str = "labelled",
-                settings: SwarmSettings | None = None, seed: int = 0) -> MarkerFit:
+                filter_passes: int = 1, settings: SwarmSettings | None = None,
+                seed: int = 0) -> MarkerFit:
     """Fit the 33-DoF hand model to a marker track.
 
     Parameters
@@ -103,6 +105,8 @@ def fit_markers(markers: np.ndarray, *, hand: str = "right", units: str = "mm",
         Frames between key frames; 1 fits every frame in sequence.
     correspondence
         Marker correspondence of the swarm's marker term: ``"labelled"`` or ``"nearest"``.
+    filter_passes
+        Passes of per-frame IK plus filtering over the whole track (0 for none).
     settings
         Particle swarm settings (default: the paper's).
     seed
@@ -136,6 +140,7 @@ def fit_markers(markers: np.ndarray, *, hand: str = "right", units: str = "mm",
         guesses = interpolate_poses(keys, key_poses, between)
         poses[between] = refine_poses(model, mm[between], guesses, solver=solver,
                                       settings=settings, rng=rng)
+    poses = filter_and_refine(model, mm, poses, passes=filter_passes)
     joints = forward_kinematics(model, poses)
     residual = np.where(visible, np.linalg.norm(joints - mm, axis=-1), np.nan)
     return MarkerFit(model=model, poses=poses, joints=joints / mm_per_unit,
