@@ -14,6 +14,10 @@ degrees, i.e. the local rotation matrix is ``Rx(x) @ Rz(z) @ Ry(y)``. That order
 middle angle on the abduction axis ``Z``, which never nears 90 degrees in a hand, so
 finger flexion (about ``X``) never hits gimbal lock; angles are unwrapped over time.
 
+Bones are rigid: they keep their measured directions and take the given lengths
+(:func:`handdb.rotations.joint_rotations` with ``keep_lengths=True``), as BVH readers
+expect constant offsets.
+
 Axes and units: Y-up as in USD export (handdb's camera frame turned 180 degrees about
 ``x``, :data:`handdb.rotations.CAMERA_TO_Y_UP`); lengths in the clip's units.
 ``Frame Time`` is ``1 / fps`` seconds.

@@ -82,7 +82,9 @@ def read_stored_motion(db: str, clip_id: str) -> StoredMotion:
                         units=clip["units"], fps=clip["fps"], xyz=xyz, bone_lengths=lengths)
 
 
-def export_stored_clip(db: str, clip_id: str, out: str | Path) -> Path:
+def export_stored_clip(
+    db: str, clip_id: str, out: str | Path, *, keep_lengths: bool = False
+) -> Path:
     """Export the stored clip ``clip_id`` to ``out`` (USD or BVH, by suffix).
 
     Parameters
@@ -93,6 +95,9 @@ def export_stored_clip(db: str, clip_id: str, out: str | Path) -> Path:
         The clip to export.
     out
         Output file, one of :data:`EXPORT_SUFFIXES`; its folder is created if missing.
+    keep_lengths
+        USD only: give every bone its stored length instead of reproducing ``joints_3d``
+        exactly (BVH bones always keep their lengths).
 
     Returns
     -------
@@ -109,4 +114,4 @@ def export_stored_clip(db: str, clip_id: str, out: str | Path) -> Path:
                                bone_lengths=motion.bone_lengths, fps=motion.fps)
     return export_clip_usd(out, clip_id=clip_id, skeleton=motion.skeleton, xyz=motion.xyz,
                            bone_lengths=motion.bone_lengths, fps=motion.fps,
-                           units=motion.units, hand=motion.hand)
+                           units=motion.units, hand=motion.hand, keep_lengths=keep_lengths)

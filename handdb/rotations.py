@@ -32,7 +32,9 @@ non-rigid palm is reproduced. The root's translation is its position.
 Forward kinematics of these transforms reproduces the input positions exactly when the
 bones have the given lengths. When noisy positions disagree with the lengths, every bone
 keeps its measured direction and takes the given length, so joints further down a chain
-move along with the corrected bones above them.
+move along with the corrected bones above them. With ``keep_lengths=False`` the bones
+take their measured length at every frame instead (the translations stretch), and the
+input positions are reproduced exactly whatever their lengths.
 
 Quaternions are ``(w, x, y, z)``, scalar first, in float64, and each joint's quaternion
 keeps one sign through the clip (no ``q -> -q`` flips between frames).
@@ -257,7 +259,9 @@ def _continuous_sign(quaternions: np.ndarray) -> np.ndarray:
     return quaternions * np.concatenate([np.ones((1, *signs.shape[1:])), signs])[..., None]
 
 
-def joint_rotations(xyz: np.ndarray, skeleton: Skeleton, bone_lengths: np.ndarray) -> JointMotion:
+def joint_rotations(
+    xyz: np.ndarray, skeleton: Skeleton, bone_lengths: np.ndarray, *, keep_lengths: bool = True
+) -> JointMotion:
     """Local joint rotations and translations that pose ``skeleton`` like ``xyz``.
 
     Parameters
@@ -269,13 +273,17 @@ def joint_rotations(xyz: np.ndarray, skeleton: Skeleton, bone_lengths: np.ndarra
     bone_lengths
         ``(J,) float64`` length of the bone ending at each joint, clip units (see
         :func:`bone_length_array`).
+    keep_lengths
+        ``True``: every bone has its length from ``bone_lengths``. ``False``: every bone
+        has its length measured in ``xyz`` at each frame.
 
     Returns
     -------
     JointMotion
         Local rotations ``(T, J, 4)`` ``(w, x, y, z)`` and translations ``(T, J, 3)``. Their
         forward kinematics (:func:`forward_kinematics`) gives back ``xyz`` when its bones
-        have ``bone_lengths``, else the joints reached by keeping each bone's direction.
+        have ``bone_lengths`` or ``keep_lengths`` is ``False``; otherwise the joints reached
+        by keeping each bone's direction.
     """
     xyz = np.asarray(xyz, dtype=np.float64)
     if not np.isfinite(xyz).all():
@@ -292,11 +300,13 @@ def joint_rotations(xyz: np.ndarray, skeleton: Skeleton, bone_lengths: np.ndarra
     translations[:, root] = xyz[:, root]
     n_children = child_counts(skeleton)
     for parent, child in skeleton.bones:
+        offset = np.einsum("tji,tj->ti", frames[:, parent], xyz[:, child] - xyz[:, parent])
+        measured = np.linalg.norm(offset, axis=-1)
+        length = np.full_like(measured, bone_lengths[child]) if keep_lengths else measured
         if n_children[parent] == 1:
-            translations[:, child, 1] = bone_lengths[child]
+            translations[:, child, 1] = length
         else:
-            offset = np.einsum("tji,tj->ti", frames[:, parent], xyz[:, child] - xyz[:, parent])
-            translations[:, child] = bone_lengths[child] * _unit(offset)
+            translations[:, child] = length[:, None] * _unit(offset)
 
     flat = Rotation.from_matrix(local.reshape(-1, 3, 3))
     quaternions = flat.as_quat(scalar_first=True).reshape(*xyz.shape[:2], 4)

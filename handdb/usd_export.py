@@ -19,8 +19,12 @@ Lengths stay in the clip's units and ``metersPerUnit`` says which. Frame ``i`` i
 code ``i``; ``timeCodesPerSecond`` and ``framesPerSecond`` are the clip's fps.
 
 Joint transforms come from :func:`handdb.rotations.joint_rotations` unless the caller
-passes its own (e.g. fitted) :class:`~handdb.rotations.JointMotion`. The bind and rest
-pose is the flat hand of :func:`handdb.rotations.rest_pose`, in which the mesh is built.
+passes its own (e.g. fitted) :class:`~handdb.rotations.JointMotion`. By default the
+animation reproduces the positions exactly: where they disagree with the bone lengths
+(noisy lifting), a bone takes its measured length in that frame through the joint's
+translation channel. ``keep_lengths=True`` imposes the bone lengths instead (rigid bones,
+measured directions). The bind and rest pose is the flat hand of
+:func:`handdb.rotations.rest_pose` with the given bone lengths; the mesh is built in it.
 """
 
 from __future__ import annotations
@@ -204,6 +208,7 @@ def export_clip_usd(
     units: str,
     hand: str,
     rotations: JointMotion | None = None,
+    keep_lengths: bool = False,
 ) -> Path:
     """Write a clip as a UsdSkel animation with a skinned hand mesh.
 
@@ -228,6 +233,9 @@ def export_clip_usd(
         ``left`` or ``right``.
     rotations
         Local joint transforms to export instead of those computed from ``xyz``.
+    keep_lengths
+        When computing the transforms: ``False`` reproduces ``xyz`` exactly, ``True``
+        gives every bone its length from ``bone_lengths`` (see the module doc).
 
     Returns
     -------
@@ -262,7 +270,7 @@ def export_clip_usd(
         if missing.any():
             raise StageError(f"clip '{clip_id}': {missing.sum()} of {len(xyz)} frames have "
                              "joints without a 3D position; fill the gaps before exporting")
-        rotations = joint_rotations(xyz, skeleton, bone_lengths)
+        rotations = joint_rotations(xyz, skeleton, bone_lengths, keep_lengths=keep_lengths)
     stage = build_clip_stage(clip_id=clip_id, skeleton=skeleton, motion=rotations,
                              bone_lengths=np.asarray(bone_lengths, dtype=np.float64),
                              fps=fps, units=units, hand=hand)

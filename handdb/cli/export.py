@@ -25,12 +25,18 @@ UsdOut = Annotated[Path, typer.Option("--out", help="Output file: .usda, .usdc, 
 BvhOut = Annotated[Path, typer.Option("--out", help="Output .bvh file.")]
 
 
-def _export(db: str, clip: str, out: Path, suffixes: tuple[str, ...]) -> None:
+KeepLengths = Annotated[bool, typer.Option(
+    "--keep-lengths", help="Give every bone its stored length (rigid bones, measured "
+    "directions) instead of reproducing joints_3d exactly.")]
+
+
+def _export(db: str, clip: str, out: Path, suffixes: tuple[str, ...],
+            keep_lengths: bool = False) -> None:
     if out.suffix not in suffixes:
         raise typer.BadParameter(f"'{out}' must end in one of {', '.join(suffixes)}",
                                  param_hint="--out")
     try:
-        written = export_stored_clip(db, clip, out)
+        written = export_stored_clip(db, clip, out, keep_lengths=keep_lengths)
     except HanddbError as exc:
         typer.echo(f"error: {exc}", err=True)
         raise typer.Exit(1) from None
@@ -38,9 +44,10 @@ def _export(db: str, clip: str, out: Path, suffixes: tuple[str, ...]) -> None:
 
 
 @app.command("export-usd")
-def export_usd(clip: Clip, out: UsdOut, db: Db = DEFAULT_DB) -> None:
+def export_usd(clip: Clip, out: UsdOut, db: Db = DEFAULT_DB,
+               keep_lengths: KeepLengths = False) -> None:
     """Export a clip as a UsdSkel animation with a skinned hand mesh."""
-    _export(db, clip, out, (*LAYER_SUFFIXES, USDZ_SUFFIX))
+    _export(db, clip, out, (*LAYER_SUFFIXES, USDZ_SUFFIX), keep_lengths)
 
 
 @app.command("export-bvh")

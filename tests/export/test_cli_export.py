@@ -1,3 +1,5 @@
+from dataclasses import replace
+
 import numpy as np
 import pyarrow as pa
 import pytest
@@ -34,12 +36,11 @@ def table_with(name, columns):
     return tables.from_columns(name, filled)
 
 
-@pytest.fixture
-def database(tmp_path):
-    motion = make_hinge_motion(load_skeleton("mediapipe21"), n_frames=24, seed=7)
+def write_database(folder, motion):
+    """A database holding ``motion`` as clip :data:`CLIP_ID`; return its location."""
     skeleton = motion.skeleton
     T, J = motion.xyz.shape[:2]
-    store = Store(str(tmp_path / "db"))
+    store = Store(str(folder))
     store.write("clips", CLIP_ID, table_with("clips", {
         "clip_id": [CLIP_ID], "skeleton": ["mediapipe21"], "hand": ["left"], "fps": [60.0],
         "units": ["mm"], "n_frames": [T], "n_joints": [J]}))
@@ -53,7 +54,13 @@ def database(tmp_path):
     store.write("bone_lengths", CLIP_ID, table_with("bone_lengths", {
         "clip_id": [CLIP_ID] * len(bones), "bone": bones,
         "length": [motion.bone_lengths[skeleton.index(b)] for b in bones]}))
-    return store.url, motion
+    return store.url
+
+
+@pytest.fixture
+def database(tmp_path):
+    motion = make_hinge_motion(load_skeleton("mediapipe21"), n_frames=24, seed=7)
+    return write_database(tmp_path / "db", motion), motion
 
 
 def test_read_stored_motion(database):
@@ -88,6 +95,28 @@ def test_export_bvh_command(database, tmp_path):
     tip = motion.xyz[:, motion.skeleton.index("index_tip")]
     np.testing.assert_allclose(bvh_positions(joints, values)["index_tip"],
                                CAMERA_TO_Y_UP.apply(tip), atol=1e-3)
+
+
+@pytest.mark.parametrize("keep_lengths", [False, True])
+def test_export_usd_of_noisy_joints(tmp_path, keep_lengths):
+    motion = make_hinge_motion(load_skeleton("mediapipe21"), n_frames=10, seed=8)
+    noisy = replace(motion, xyz=motion.xyz + np.random.default_rng(0).normal(
+        scale=3.0, size=motion.xyz.shape))
+    db = write_database(tmp_path / "db", noisy)
+    out = tmp_path / "clip.usdc"
+    flag = ["--keep-lengths"] if keep_lengths else []
+    result = CliRunner().invoke(app, ["export-usd", "--clip", CLIP_ID, "--out", str(out),
+                                      "--db", db, *flag])
+    assert result.exit_code == 0, result.output
+    stage_xyz = joint_world_positions(open_skeleton(out), len(noisy.xyz))
+    parent, child = motion.skeleton.bones.T
+    bones = np.linalg.norm(stage_xyz[:, child] - stage_xyz[:, parent], axis=-1)
+    if keep_lengths:
+        np.testing.assert_allclose(bones, np.broadcast_to(motion.bone_lengths[child],
+                                                          bones.shape), atol=1e-3)
+    else:
+        np.testing.assert_allclose(stage_xyz, CAMERA_TO_Y_UP.apply(
+            noisy.xyz.reshape(-1, 3)).reshape(noisy.xyz.shape), atol=1e-3)
 
 
 def test_unknown_clip_and_wrong_suffix_are_reported(database, tmp_path):

@@ -43,14 +43,17 @@ def test_noisy_bones_keep_their_directions(capture):
     assert np.abs(fk - xyz).max() > 1.0        # the capture really disagrees with its lengths
 
 
-def test_noisy_capture_exports_valid_usd(capture, tmp_path):
+@pytest.mark.parametrize("keep_lengths", [False, True])
+def test_noisy_capture_exports_valid_usd(capture, tmp_path, keep_lengths):
     skeleton, xyz, lengths = capture
     path = export_clip_usd(tmp_path / "dhg.usda", clip_id="dhg", skeleton=skeleton, xyz=xyz,
-                           bone_lengths=lengths, fps=30.0, units="mm", hand="right")
+                           bone_lengths=lengths, fps=30.0, units="mm", hand="right",
+                           keep_lengths=keep_lengths)
     opened = open_skeleton(path)
     assert validation_errors(opened.stage) == []
-    fk = forward_kinematics(joint_rotations(xyz, skeleton, lengths), skeleton)
+    rigid = forward_kinematics(joint_rotations(xyz, skeleton, lengths), skeleton)
+    expected = rigid if keep_lengths else xyz
     stage_xyz = joint_world_positions(opened, len(xyz))
-    expected = CAMERA_TO_Y_UP.apply(fk.reshape(-1, 3)).reshape(fk.shape)
+    expected = CAMERA_TO_Y_UP.apply(expected.reshape(-1, 3)).reshape(xyz.shape)
     assert np.abs(stage_xyz - expected).max() < 1e-4 * lengths[lengths > 0].min()
     assert np.isfinite(posed_vertices(hand_mesh(skeleton, lengths), xyz, skeleton, lengths)).all()

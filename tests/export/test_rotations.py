@@ -71,6 +71,8 @@ def test_noisy_positions_keep_bone_directions():
     cosine = np.sum(fk_bones * noisy_bones, axis=-1) / (
         np.linalg.norm(fk_bones, axis=-1) * np.linalg.norm(noisy_bones, axis=-1))
     np.testing.assert_allclose(cosine, 1.0, atol=1e-12)
+    stretched = joint_rotations(noisy, skeleton, hinge.bone_lengths, keep_lengths=False)
+    np.testing.assert_allclose(forward_kinematics(stretched, skeleton), noisy, atol=1e-9)
 
 
 @pytest.mark.parametrize("name", ["mediapipe21", "thesis21", "dhg22"])
