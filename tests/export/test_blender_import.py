@@ -2,6 +2,7 @@
 
 import json
 import subprocess
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -29,9 +30,12 @@ pytestmark = [
 ]
 
 
-@pytest.mark.parametrize("suffix", [".usd", ".usdz"])
-def test_blender_imports_an_animated_armature(tmp_path, suffix):
-    motion = make_hinge_motion(load_skeleton("mediapipe21"), n_frames=40, seed=11)
+@pytest.mark.parametrize(("suffix", "noise_mm"), [(".usd", 0.0), (".usdz", 2.0)])
+def test_blender_imports_an_animated_armature(tmp_path, suffix, noise_mm):
+    """Noisy joints (bones that disagree with their lengths) must come through exactly too."""
+    hinge = make_hinge_motion(load_skeleton("mediapipe21"), n_frames=40, seed=11)
+    motion = replace(hinge, xyz=hinge.xyz + np.random.default_rng(2).normal(
+        scale=noise_mm, size=hinge.xyz.shape))
     units = "mm"
     path = export_clip_usd(tmp_path / f"clip{suffix}", clip_id="clip-01", skeleton=motion.skeleton,
                            xyz=motion.xyz, bone_lengths=motion.bone_lengths, fps=motion.fps,
