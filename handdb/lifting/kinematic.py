@@ -271,11 +271,6 @@ def _log_evidence(log_likelihood: np.ndarray) -> np.ndarray:
     return peak + np.log(np.exp(log_likelihood - peak[..., None]).sum(axis=-1))
 
 
-def _state_index(signs: np.ndarray) -> np.ndarray:
-    weights = 2 ** np.arange(CHAIN_BONES - 1, -1, -1)
-    return np.sum((signs < 0) * weights, axis=-1)
-
-
 def resolve_signs(xy: np.ndarray, abs_dz: np.ndarray, bone_lengths: np.ndarray,
                   skeleton: Skeleton, hand: str) -> tuple[np.ndarray, np.ndarray, float]:
     """Depth sign of every bone, its confidence and the odds against the mirror.
@@ -325,13 +320,13 @@ def resolve_signs(xy: np.ndarray, abs_dz: np.ndarray, bone_lengths: np.ndarray,
                                  flip_costs(chain_dz, floor)).reshape(chosen.shape[:2] + (3,))
     finger_signs = np.where(finger_odds < 0, -1.0, 1.0)
 
-    index = _state_index(finger_signs)[:, None, :, None]                # (T, 1, F, 1)
-    mirror_state = 1 - state
-    own = np.take_along_axis(np.take_along_axis(
-        anatomy, state[:, None, None, None], axis=1)[:, 0], index[:, 0], axis=-1)
-    mirror = np.take_along_axis(np.take_along_axis(
-        anatomy, mirror_state[:, None, None, None], axis=1)[:, 0],
-        len(SIGN_STATES) - 1 - index[:, 0], axis=-1)
+    # The mirror flips the palm tilt and every finger state at once. Compare each frame's
+    # best pose under the chosen tilt with its exact mirror image, on anatomy alone.
+    frames = np.arange(n_frames)[:, None]
+    fingers = np.arange(len(layout.fingers))[None, :]
+    best = np.argmax(chosen, axis=-1)                                    # (T, F)
+    own = anatomy[frames, state[:, None], fingers, best]
+    mirror = anatomy[frames, 1 - state[:, None], fingers, len(SIGN_STATES) - 1 - best]
     mirror_log_odds = float(np.sum(own - mirror))
     palm_sign = 1.0 - 2.0 * state
     if mirror_log_odds < 0:

@@ -111,8 +111,6 @@ def tilted_flat_hand(n_frames=30):
     return skeleton, lengths, xyz
 
 
-@pytest.mark.xfail(strict=True, reason="known gap: the range-of-motion evidence is not yet "
-                   "exactly mirror-symmetric, so a flat hand's mirror odds come out ~e^73")
 def test_mirror_ambiguity_is_reported_for_a_flat_hand():
     skeleton, lengths, xyz = tilted_flat_hand()
     result = lift(xyz[..., :2] * 2.0, skeleton, lengths, ORTHOGRAPHIC)
