@@ -165,7 +165,8 @@ def pose_energy(model: HandModel, pose: np.ndarray, observed: np.ndarray, visibl
 
 
 def particle_swarm(energy: Callable[[np.ndarray], np.ndarray], start: np.ndarray,
-                   lower: np.ndarray, upper: np.ndarray, settings: SwarmSettings,
+                   sigma: np.ndarray, lower: np.ndarray, upper: np.ndarray,
+                   settings: SwarmSettings,
                    rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
     """Minimise ``energy`` by constricted particle swarm optimisation (eqs. 9–11).
 
@@ -177,7 +178,9 @@ def particle_swarm(energy: Callable[[np.ndarray], np.ndarray], start: np.ndarray
         Maps positions ``(..., P, D)`` to energies ``(..., P)``.
     start
         ``(..., D)`` seed of each problem; particle 0 starts on it, the others at Gaussian
-        perturbations of it (``settings.sigma()``).
+        perturbations of it.
+    sigma
+        ``(D,)`` standard deviation of the perturbations.
     lower, upper
         ``(D,)`` bounds; particles are kept inside.
     settings
@@ -194,7 +197,7 @@ def particle_swarm(energy: Callable[[np.ndarray], np.ndarray], start: np.ndarray
     """
     start = np.asarray(start, dtype=np.float64)
     shape = start.shape[:-1] + (settings.n_particles, start.shape[-1])
-    noise = rng.standard_normal(shape) * settings.sigma()
+    noise = rng.standard_normal(shape) * sigma
     noise[..., 0, :] = 0.0
     x = np.clip(start[..., None, :] + noise, lower, upper)
     v = np.zeros_like(x)
@@ -246,8 +249,8 @@ def fit_pose_pso(model: HandModel, observed: np.ndarray, visible: np.ndarray,
                            anchor_weight=anchor_weight, cutoff=cutoff,
                            correspondence=correspondence)
 
-    best, _ = particle_swarm(energy, clip_to_limits(model, start), model.lower, model.upper,
-                             settings, rng)
+    best, _ = particle_swarm(energy, clip_to_limits(model, start), settings.sigma(),
+                             model.lower, model.upper, settings, rng)
     return best
 
 
