@@ -38,8 +38,9 @@ CALIBRATION_FRAMES = 12
 #: Weight λ1 of the pull of bone lengths towards the marker distances, per mm².
 LENGTH_PRIOR_WEIGHT = 0.05
 
-#: Weight of the X-ray ratio prior, per squared standard deviation.
-RATIO_PRIOR_WEIGHT = 1.0
+#: Weight of the X-ray ratio prior, per squared standard deviation: weak, so that a bone
+#: both of whose markers are seen is measured by them, while one seldom seen leans on it.
+RATIO_PRIOR_WEIGHT = 0.1
 
 #: Weight of the pull of palm bone directions towards the template, per mm² at the joint.
 PALM_PRIOR_WEIGHT = 0.01

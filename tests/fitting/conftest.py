@@ -10,9 +10,10 @@ from handdb.kinematics import N_DOF, HandModel, build_hand_model
 
 
 def perturbed_hand(model: HandModel, seed: int) -> HandModel:
-    """A hand whose bone lengths (±12 %) and palm shape differ from ``model``'s."""
+    """A hand of another size (±10 %), bones varying ±5 % more, and another palm shape."""
     rng = np.random.default_rng(seed)
-    lengths = model.bone_lengths * rng.uniform(0.88, 1.12, model.bone_lengths.shape)
+    size = rng.choice([0.9, 1.1])
+    lengths = model.bone_lengths * size * rng.uniform(0.95, 1.05, model.bone_lengths.shape)
     directions = model.rest_directions.copy()
     directions[model.palm_joints] += rng.normal(0.0, 0.04, (len(model.palm_joints), 3))
     return model.with_geometry(lengths, directions)
