@@ -30,6 +30,7 @@ from handdb import __version__, pipeline, progress, tables
 from handdb.quarantine import Refusal, quarantine_table
 from handdb.readers import InboxScan, content_hash, discover
 from handdb.store import Store
+from handdb.validation import clip_summary
 
 #: Clips whose task chains run at once; bounds memory and the thread pool's queue.
 WINDOW_PER_WORKER = 2
@@ -58,10 +59,12 @@ class BuildSummary:
     inbox: str
     db: str
     n_clips: int = 0
+    n_frames: int = 0
     processed: list[str] = field(default_factory=list)
     unchanged: list[str] = field(default_factory=list)
     refusals: list[Refusal] = field(default_factory=list)
     failed: dict[str, str] = field(default_factory=dict)
+    validation: dict[str, dict[str, dict[str, float]]] = field(default_factory=dict)
     timings: dict[str, float] = field(default_factory=dict)
 
     @property
@@ -254,6 +257,9 @@ def build(
                     logger.error("clip %s failed: %s", clip_id, outcome)
                 else:
                     summary.processed.append(clip_id)
+                    summary.n_frames += outcome.clip.n_frames
+                    if outcome.validation is not None:
+                        summary.validation[clip_id] = clip_summary(outcome.validation)
         summary.timings["clips"] = time.perf_counter() - t0
 
         previous = store.read_table("quarantine")
@@ -274,12 +280,21 @@ def summary_markdown(summary: BuildSummary) -> str:
         f"- inbox: `{summary.inbox}`, database: `{summary.db}`",
         f"- clips in the inbox: {summary.n_clips}; processed {len(summary.processed)}, "
         f"unchanged {len(summary.unchanged)}, failed {len(summary.failed)}",
+        f"- frames processed: {summary.n_frames}",
         f"- refused inputs (quarantine): {len(summary.refusals)}",
     ]
     if summary.refusals:
         lines += ["", "| file | line | field | reason |", "|---|---|---|---|"]
         lines += [f"| {r.file} | {r.line or ''} | {r.field or ''} | {r.reason} |"
                   for r in summary.refusals]
+    if summary.validation:
+        lines += ["", "Depth against ground truth, processed clips (clip units):", "",
+                  "| clip | method | mean abs dZ | sign accuracy | MPJPE |",
+                  "|---|---|---:|---:|---:|"]
+        lines += [f"| {clip_id} | {method} | {f['dz_mean']:.3g} | {f['sign_accuracy']:.1%} | "
+                  f"{f['mpjpe']:.3g} |"
+                  for clip_id, methods in sorted(summary.validation.items())
+                  for method, f in sorted(methods.items(), key=lambda kv: kv[1]["dz_mean"])]
     if summary.failed:
         lines += ["", "| failed clip | error |", "|---|---|"]
         lines += [f"| {c} | {e} |" for c, e in summary.failed.items()]

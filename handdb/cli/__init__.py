@@ -87,7 +87,8 @@ def print_summary(summary) -> None:
     """Print a build summary: clips, refusals, failures."""
     console.print(
         f"[bold]built[/] {summary.db}: {summary.n_clips} clips in the inbox, "
-        f"{len(summary.processed)} processed, {len(summary.unchanged)} unchanged, "
+        f"{len(summary.processed)} processed ({summary.n_frames} frames), "
+        f"{len(summary.unchanged)} unchanged, "
         f"{len(summary.refusals)} refused, {len(summary.failed)} failed "
         f"({sum(summary.timings.values()):.1f} s)",
         soft_wrap=True,
