@@ -1,0 +1,58 @@
+"""Throughput of depth reconstruction (issue 4): frames per second of every lifting method.
+
+Clips of rapid gestures (mediapipe21, 21 joints), orthographic and pinhole, at several
+lengths; the best of a few runs of :func:`handdb.lifting.lift` per setting. The machine's
+load average is printed too, since the figures scale with the share of a core the
+process gets.
+
+Run: ``.venv/bin/python benchmarks/bench_lifting.py``.
+"""
+
+from __future__ import annotations
+
+import os
+import time
+
+import numpy as np
+
+from handdb.clip import Camera
+from handdb.lifting import available_methods, bone_length_array, lift
+from handdb.skeletons import load_skeleton
+from handdb.synthetic.clips import synthesize_clip
+
+LENGTHS = (400, 10_000, 100_000)
+REPEATS = 3
+
+
+def frames_per_second(uv, skeleton, lengths, camera, method) -> float:
+    """Best of :data:`REPEATS` runs, frames per second."""
+    best = float("inf")
+    for _ in range(REPEATS):
+        start = time.perf_counter()
+        lift(uv, skeleton, lengths, camera, method=method)
+        best = min(best, time.perf_counter() - start)
+    return len(uv) / best
+
+
+def main() -> None:
+    print(f"load average {os.getloadavg()[0]:.1f} on {os.cpu_count()} cores")
+    print(f"{'camera':13s} {'method':15s} " + " ".join(f"{n:>10d}" for n in LENGTHS))
+    for camera_model in ("orthographic", "pinhole"):
+        clip = synthesize_clip("rapid", 400, camera=camera_model, seed=0)
+        skeleton = load_skeleton(clip.skeleton)
+        lengths = bone_length_array(skeleton, clip.bone_lengths)
+        camera = Camera(**clip.camera) if camera_model == "pinhole" else Camera()
+        for method in available_methods():
+            rates = []
+            for n_frames in LENGTHS:
+                if camera_model == "pinhole" and method == "kinematic" and n_frames > 10_000:
+                    rates.append(float("nan"))
+                    continue
+                uv = np.tile(clip.uv, (n_frames // len(clip.uv), 1, 1))
+                rates.append(frames_per_second(uv, skeleton, lengths, camera, method))
+            print(f"{camera_model:13s} {method:15s} " + " ".join(f"{r:10.0f}" for r in rates))
+    print("frames per second (columns: clip length in frames)")
+
+
+if __name__ == "__main__":
+    main()
