@@ -145,7 +145,7 @@ def palm_signs(xy: np.ndarray, abs_dz: np.ndarray, skeleton: Skeleton,
     residual = np.eye(len(joints)) - design @ fit                        # (T, Q, Q)
     spans = np.nan_to_num(abs_dz[:, bones])[:, None, :] * to_depth       # (T, Q, P)
     quadratic = np.swapaxes(spans, 1, 2) @ residual @ spans              # (T, P, P)
-    misfit = np.einsum("cp,tpq,cq->tc", combos, quadratic, combos)
+    misfit = np.sum((quadratic @ combos.T) * combos.T, axis=1)          # (T, C)
     best = np.argmin(misfit, axis=1)
     coef = np.einsum("tkq,tqp,tp->tk", fit, spans, combos[best])
     tilt = coef[:, :2]
@@ -215,7 +215,8 @@ def finger_log_likelihood(xy: np.ndarray, abs_dz: np.ndarray, palm_z: np.ndarray
     depth = abs_dz[:, layout.chains]                                     # (T, F, 3)
 
     def component(axis: np.ndarray) -> np.ndarray:                      # (T, 2, F, 3, 2)
-        planar = np.einsum("tfbc,tmfc->tmfb", bones_2d, axis[..., :2])
+        planar = (bones_2d[:, None, :, :, 0] * axis[:, :, :, None, 0]
+                  + bones_2d[:, None, :, :, 1] * axis[:, :, :, None, 1])
         along_z = depth[:, None] * axis[..., 2:3]
         return planar[..., None] + BONE_SIGNS * along_z[..., None]
 
