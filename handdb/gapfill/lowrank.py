@@ -48,6 +48,7 @@ def lowrank_reconstruct(
     uv: np.ndarray,
     missing: np.ndarray,
     *,
+    initial: np.ndarray | None = None,
     variance: float = DEFAULT_VARIANCE,
     max_iterations: int = MAX_ITERATIONS,
     tolerance: float = TOLERANCE,
@@ -60,6 +61,9 @@ def lowrank_reconstruct(
         ``(T, J, 2) float64``, pixels, NaN where missing.
     missing
         ``(T, J) bool``.
+    initial
+        ``(T, J, 2) float64``: first estimates of the missing points (a good start saves
+        iterations); linear interpolation when ``None``.
     variance
         Share of the normalised variance the principal components keep, in (0, 1].
     max_iterations, tolerance
@@ -76,7 +80,8 @@ def lowrank_reconstruct(
     columns = np.repeat(seen, 2)
     known = np.repeat(~missing[:, seen], 2, axis=1)
     patterns, pattern_of_frame = np.unique(known, axis=0, return_inverse=True)
-    data = interpolate_gaps(uv, missing, "linear")[:, seen].reshape(n_frames, -1)
+    start = interpolate_gaps(uv, missing, "linear") if initial is None else initial
+    data = np.where(missing[..., None], start, uv)[:, seen].reshape(n_frames, -1)
     for _ in range(max_iterations):
         mean = data.mean(axis=0)
         spread = np.maximum(data.std(axis=0), MIN_SPREAD)

@@ -18,7 +18,7 @@ import numpy as np
 
 from handdb.gapfill.rest_pose import rest_pose_2d
 from handdb.gapfill.rigid import MIN_PALM_POINTS, palm_joints
-from handdb.gapfill.transfer import fit_maps
+from handdb.gapfill.transfer import AFFINE, NO_MAP, fit_maps
 from handdb.skeletons import Skeleton
 
 
@@ -33,8 +33,8 @@ class PalmMotion:
     offset
         ``(T, 2) float64``, pixels: image = ``linear @ palm_frame + offset``.
     fitted
-        ``(T,) bool``: fitted to the frame's own palm points (else interpolated in time and
-        corrected).
+        ``(T,) bool``: fitted to the frame's own palm points, at least three and not in a
+        line (else interpolated in time and corrected).
     """
 
     linear: np.ndarray
@@ -72,30 +72,33 @@ def palm_motion(uv: np.ndarray, missing: np.ndarray, skeleton: Skeleton) -> Palm
     -------
     PalmMotion or None
         ``None`` when no frame shows :data:`~handdb.gapfill.rigid.MIN_PALM_POINTS` palm
-        points.
+        points spread enough for an affine fit.
     """
     palm = palm_joints(skeleton)
     palm_seen = ~missing & palm
-    fitted = palm_seen.sum(axis=1) >= MIN_PALM_POINTS
-    if not fitted.any():
+    if not (palm_seen.sum(axis=1) >= MIN_PALM_POINTS).any():
         return None
     complete = palm_seen.sum(axis=1) == palm.sum()
-    shaping = complete if complete.any() else fitted
     reference = rest_pose_2d(skeleton)
     for _ in range(2):
-        linear, offset, _ = _fit_to(reference, uv, palm_seen)
+        linear, offset, kind = _fit_to(reference, uv, palm_seen)
+        fitted = kind == AFFINE
+        shaping = complete if complete.any() else fitted
         inverse = np.linalg.inv(np.where(fitted[:, None, None], linear, np.eye(2)))
         canonical = np.einsum("tij,tkj->tki", inverse, np.nan_to_num(uv) - offset[:, None])
         canonical = np.where((palm_seen & shaping[:, None])[..., None], canonical, np.nan)
         seen_once = ~np.isnan(canonical[..., 0]).all(axis=0)
         reference = np.where(seen_once[:, None], np.nanmedian(
             np.where(seen_once[None, :, None], canonical, 0.0), axis=0), reference)
-    linear, offset, _ = _fit_to(reference, uv, palm_seen)
+    linear, offset, kind = _fit_to(reference, uv, palm_seen)
+    fitted = kind == AFFINE
+    if not fitted.any():
+        return None
     linear = _interpolate_in_time(linear, fitted)
     offset = _interpolate_in_time(offset, fitted)
     predicted = np.einsum("tij,kj->tki", linear, reference) + offset[:, None]
-    correction, shift, count = fit_maps(predicted, uv, palm_seen & ~fitted[:, None], affine=False)
-    corrected = count >= 1
+    correction, shift, kind = fit_maps(predicted, uv, palm_seen & ~fitted[:, None], affine=False)
+    corrected = kind > NO_MAP
     linear = np.where(corrected[:, None, None], correction @ linear, linear)
     offset = np.where(corrected[:, None], np.einsum("tij,tj->ti", correction, offset) + shift,
                       offset)

@@ -17,6 +17,9 @@ import numpy as np
 #: affine fit (below it the points are nearly collinear and the similarity is used).
 MIN_AFFINE_SPREAD = 0.05
 
+#: Kinds of map :func:`fit_maps` fits, by the number of parameters it could determine.
+NO_MAP, TRANSLATION, SIMILARITY, AFFINE = 0, 1, 2, 3
+
 
 def _weighted_mean(points: np.ndarray, weights: np.ndarray, count: np.ndarray) -> np.ndarray:
     total = np.einsum("nj,njk->nk", weights, np.nan_to_num(points))
@@ -44,9 +47,10 @@ def fit_maps(
         ``(N, 2, 2) float64``.
     offset
         ``(N, 2) float64``, NaN where no point took part.
-    count
-        ``(N,) int64``: points in each fit (3 or more and well spread: affine; 2:
-        similarity; 1: translation).
+    kind
+        ``(N,) int64``: the map fitted, :data:`AFFINE` (3 or more well-spread points),
+        :data:`SIMILARITY` (2 points, or collinear ones), :data:`TRANSLATION` (1 point) or
+        :data:`NO_MAP` (none).
     """
     w = weights.astype(np.float64)
     count = weights.sum(axis=1)
@@ -63,6 +67,7 @@ def fit_maps(
     linear = np.stack([np.stack([rotation.real, -rotation.imag], -1),
                        np.stack([rotation.imag, rotation.real], -1)], axis=-2)
 
+    kind = np.minimum(count, SIMILARITY)
     if affine:
         src_cov = np.einsum("nki,nkj->nij", src, src)
         cross = np.einsum("nki,nkj->nij", dst, src)
@@ -70,9 +75,10 @@ def fit_maps(
         spread_ok = (count >= 3) & (eig[:, 0] > MIN_AFFINE_SPREAD * np.maximum(eig[:, 1], 1e-300))
         safe_cov = np.where(spread_ok[:, None, None], src_cov, np.eye(2))
         linear = np.where(spread_ok[:, None, None], cross @ np.linalg.inv(safe_cov), linear)
+        kind = np.where(spread_ok, AFFINE, kind)
 
     offset = dst_mean - np.einsum("nij,nj->ni", linear, src_mean)
-    return linear, np.where((count >= 1)[:, None], offset, np.nan), count
+    return linear, np.where((count >= 1)[:, None], offset, np.nan), kind
 
 
 def map_points(
@@ -100,5 +106,5 @@ def map_points(
     ok
         ``(N,) bool``: a map could be fitted.
     """
-    linear, offset, count = fit_maps(source, target, weights, affine=affine)
-    return np.einsum("nij,nj->ni", linear, query) + offset, count >= 1
+    linear, offset, kind = fit_maps(source, target, weights, affine=affine)
+    return np.einsum("nij,nj->ni", linear, query) + offset, kind > NO_MAP

@@ -1,0 +1,110 @@
+"""Gap filling: accuracy of every method under the issue's masks, and the default's speed.
+
+Accuracy (RMSE over hidden points, pixels; the DHG capture is read as 1 px = 1 mm):
+
+* synthetic ``rapid`` clips of 400 frames (orthographic, mediapipe21): Table 4.2's mask on
+  the four 100-frame clips each makes, and 40 random interior gaps of 1-60 frames;
+* the real DHG capture (``../shared/data/dhg-sample``, 95 frames, projected by dropping z):
+  Table 4.2's mask cut to 95 frames, and 10 random gaps (40 per 400 frames).
+
+Speed: frames filled per second by each offline method and the default, on one long clip
+(synthetic clips end to end) with 40 random gaps per 400 frames.
+
+Run: ``.venv/bin/python benchmarks/bench_gapfill.py [--seeds N] [--frames N]``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+from pathlib import Path
+
+import numpy as np
+
+from handdb.gapfill import METHODS, THESIS, fill_gaps, method_names
+from handdb.gapfill.evaluate import RANDOM_MASK, THESIS_MASK, evaluate_clip, overall_rmse
+from handdb.gapfill.masks import random_gaps_mask
+from handdb.skeletons import load_skeleton
+from handdb.synthetic.clips import synthesize_clip
+
+DHG = Path(__file__).resolve().parents[1] / ".." / "shared" / "data" / "dhg-sample"
+MM_PER_M = 1000.0
+MASKS = (THESIS_MASK, RANDOM_MASK)
+
+
+def pooled(evaluations, mask, method):
+    squared = np.concatenate([e.errors[(mask, method)][e.hidden[mask]] ** 2
+                              for e in evaluations])
+    return float(np.sqrt(np.nanmean(squared)))
+
+
+def print_accuracy(title, evaluations):
+    print(f"\n{title}")
+    print(f"{'method':18s} {'family':8s} " + " ".join(f"{m:>17s}" for m in MASKS))
+    for method in METHODS:
+        cells = " ".join(f"{pooled(evaluations, m, method):17.2f}" for m in MASKS)
+        print(f"{method:18s} {METHODS[method].family:8s} {cells}")
+    for mask in MASKS:
+        best = min(method_names(THESIS), key=lambda m: pooled(evaluations, mask, m))
+        ratio = pooled(evaluations, mask, best) / pooled(evaluations, mask, "auto")
+        print(f"{mask}: best thesis method {best} / auto = {ratio:.2f} (target >= 5)")
+
+
+def accuracy_synthetic(seeds, n_frames):
+    skeleton = load_skeleton("mediapipe21")
+    evaluations = [
+        evaluate_clip(f"rapid-{s}", synthesize_clip("rapid", n_frames, seed=s).uv, skeleton,
+                      masks=MASKS, seed=s)
+        for s in range(seeds)
+    ]
+    print_accuracy(f"synthetic rapid, {seeds} clips of {n_frames} frames (pixels)", evaluations)
+    for e in evaluations:
+        rmse = overall_rmse(e)
+        clip = e.table.column("clip_id")[0].as_py()
+        print(f"  {clip}: " + ", ".join(
+            f"{mask} auto {rmse[(mask, 'auto')]:.2f} / previous {rmse[(mask, 'previous')]:.2f}"
+            for mask in MASKS))
+
+
+def accuracy_dhg():
+    path = DHG / "skeletons_world.txt"
+    if not path.is_file():
+        print(f"\nDHG sample not found at {DHG}: skipped")
+        return
+    skeleton = load_skeleton("dhg22")
+    uv = np.loadtxt(path).reshape(-1, skeleton.n_joints, 3)[..., :2] * MM_PER_M
+    evaluations = [evaluate_clip("dhg", uv, skeleton, masks=MASKS, seed=s) for s in range(4)]
+    print_accuracy("real DHG capture, 95 frames, mm (random gaps: 4 seeds)", evaluations)
+
+
+def speed(n_clips):
+    skeleton = load_skeleton("mediapipe21")
+    uv = np.concatenate([synthesize_clip("rapid", 400, seed=s).uv for s in range(n_clips)])
+    hidden = random_gaps_mask(len(uv), skeleton.n_joints, n_gaps=len(uv) // 10, seed=0)
+    print(f"\nspeed: one clip of {len(uv)} frames, {hidden.mean():.1%} of points hidden")
+    for method in ("linear", "pchip", "rigid", "lowrank", "auto"):
+        start = time.perf_counter()
+        fill_gaps(uv, ~hidden, skeleton, method)
+        elapsed = time.perf_counter() - start
+        print(f"  {method:8s} {elapsed:7.2f} s  {len(uv) / elapsed:9.0f} frames/s")
+    for rule in ("chain", "ensemble"):
+        start = time.perf_counter()
+        fill_gaps(uv, ~hidden, skeleton, "auto", long_gaps=rule)
+        elapsed = time.perf_counter() - start
+        print(f"  auto, long_gaps={rule:8s} {elapsed:7.2f} s  {len(uv) / elapsed:9.0f} frames/s")
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--seeds", type=int, default=4, help="synthetic clips")
+    parser.add_argument("--frames", type=int, default=400, help="frames per synthetic clip")
+    parser.add_argument("--speed-clips", type=int, default=10,
+                        help="400-frame clips joined for the speed test")
+    args = parser.parse_args()
+    accuracy_synthetic(args.seeds, args.frames)
+    accuracy_dhg()
+    speed(args.speed_clips)
+
+
+if __name__ == "__main__":
+    main()
