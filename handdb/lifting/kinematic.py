@@ -30,23 +30,29 @@ every joint is placed on its ray at the depth its bone length allows
 from __future__ import annotations
 
 import itertools
+from collections.abc import Callable
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
 from handdb.clip import Camera
+from handdb.lifting.finger_geometry import (
+    FingerCandidates,
+    orthographic_candidates,
+    perspective_candidates,
+)
 from handdb.lifting.geometry import (
     accumulate_depths,
-    path_matrix,
-    bone_vectors_2d,
     centred_pixels,
     depth_magnitudes,
     eq6_scale,
     orthographic_points,
+    path_matrix,
     projected_lengths,
 )
 from handdb.lifting.hand_layout import CHAIN_BONES, HandLayout, hand_layout
-from handdb.lifting.pinhole import lift_perspective
+from handdb.lifting.pinhole import camera_rays, estimate_root_depth, walk_rays
 from handdb.lifting.registry import register
 from handdb.lifting.result import LiftResult
 from handdb.lifting.temporal import flip_costs, sigmoid, sign_posterior, smooth_scale
@@ -171,62 +177,40 @@ def continuity_signs(tilt: np.ndarray) -> np.ndarray:
     return np.cumprod(turn)
 
 
-def finger_log_likelihood(xy: np.ndarray, abs_dz: np.ndarray, palm_z: np.ndarray,
-                          bone_lengths: np.ndarray, skeleton: Skeleton, layout: HandLayout,
-                          hand: str) -> np.ndarray:
+def finger_log_likelihood(candidates: FingerCandidates, bone_lengths: np.ndarray,
+                          layout: HandLayout, hand: str) -> tuple[np.ndarray, np.ndarray]:
     """Log-likelihood of each finger's sign states under each palm state.
 
     Parameters
     ----------
-    xy
-        ``(T, J, 2) float64``, clip units.
-    abs_dz
-        ``(T, J) float64``, clip units.
-    palm_z
-        ``(T, 2, J) float64``: depth of the palm joints relative to the root in palm state
-        0 and its mirror, state 1 (other joints: ignored).
+    candidates
+        Palm anchors and candidate bones (:mod:`handdb.lifting.finger_geometry`).
     bone_lengths
         ``(J,) float64``, clip units.
-    skeleton, layout, hand
-        The clip's skeleton, its palm and fingers, and which hand it is.
+    layout, hand
+        The skeleton's palm and fingers, and which hand the clip shows.
 
     Returns
     -------
     anatomy
-        ``(T, 2, F, 8) float64``: ranges of motion and DIP-PIP coupling; 0 where a
-        finger's bones have no image points.
+        ``(T, 2, F, 8) float64``: ranges of motion, the dorsal limit and the DIP-PIP
+        coupling; 0 where a finger's bones have no image points.
     comfort
         ``(T, 2, F, 8) float64``: the weak prior toward relaxed poses. It breaks ties but
         is no evidence about the clip-wide mirror, which is judged on ``anatomy`` alone.
     """
-    anchors = np.concatenate([[layout.wrist, layout.index_mcp, layout.little_mcp],
-                              layout.chain_bases])
-    z = palm_z[:, :, anchors]
-    points = np.stack([np.broadcast_to(xy[:, None, anchors, 0], z.shape),
-                       np.broadcast_to(xy[:, None, anchors, 1], z.shape), z], axis=-1)
-    wrist = points[:, :, 0]                                              # (T, 2, 3)
-    normal = HANDEDNESS[hand] * _unit(np.cross(points[:, :, 1] - wrist,
-                                               points[:, :, 2] - wrist))
-    forward = points[:, :, 3:] - wrist[:, :, None]                       # (T, 2, F, 3)
-    base_height = np.sum(forward * normal[:, :, None], axis=-1)          # (T, 2, F)
-    forward = _unit(forward - np.sum(forward * normal[:, :, None], -1, keepdims=True)
-                    * normal[:, :, None])
-    bones_2d = bone_vectors_2d(xy, skeleton)[:, layout.chains]          # (T, F, 3, 2)
-    depth = abs_dz[:, layout.chains]                                     # (T, F, 3)
-
-    def component(axis: np.ndarray) -> np.ndarray:                      # (T, 2, F, 3, 2)
-        planar = (bones_2d[:, None, :, :, 0] * axis[:, :, :, None, 0]
-                  + bones_2d[:, None, :, :, 1] * axis[:, :, :, None, 1])
-        along_z = depth[:, None] * axis[..., 2:3]
-        return planar[..., None] + BONE_SIGNS * along_z[..., None]
-
-    normal_f = np.broadcast_to(normal[:, :, None], forward.shape)
-    palmar = component(normal_f)
-    # Each bone's angle in the finger plane depends on its own sign only: (..., bone, sign).
-    phi = np.arctan2(palmar, component(forward))
-    mcp = phi[..., 0, :, None, None]                                     # sign axes (1,2,3)
-    pip = _wrap(phi[..., 1, None, :, None] - mcp)
-    dip = _wrap(phi[..., 2, None, None, :] - phi[..., 1, None, :, None])
+    anchors = candidates.anchors
+    wrist = anchors[:, :, 0]                                             # (T, 2, 3)
+    normal = HANDEDNESS[hand] * _unit(np.cross(anchors[:, :, 1] - wrist,
+                                               anchors[:, :, 2] - wrist))[:, :, None]
+    forward = anchors[:, :, 3:] - wrist[:, :, None]                      # (T, 2, F, 3)
+    base_height = np.sum(forward * normal, axis=-1)                      # (T, 2, F)
+    forward = _unit(forward - base_height[..., None] * normal)
+    on_signs = (slice(None), slice(None), slice(None), None, None, None)
+    palmar = [np.sum(bone * normal[on_signs], axis=-1) for bone in candidates.bones]
+    ahead = [np.sum(bone * forward[on_signs], axis=-1) for bone in candidates.bones]
+    phi = [np.arctan2(p, a) for p, a in zip(palmar, ahead, strict=True)]
+    mcp, pip, dip = phi[0], _wrap(phi[1] - phi[0]), _wrap(phi[2] - phi[1])
     thumb = layout.is_thumb[:, None, None, None]
     ranges = np.radians(np.where(thumb[..., None, None], THUMB_RANGE_DEG,
                                  LONG_FINGER_RANGE_DEG))                 # (F,1,1,1,3,2)
@@ -240,9 +224,9 @@ def finger_log_likelihood(xy: np.ndarray, abs_dz: np.ndarray, palm_z: np.ndarray
     coupling = (dip - DIP_PIP_RATIO * pip) / np.radians(COUPLING_SIGMA_DEG)
     first_bone = bone_lengths[layout.chains[:, 0]][:, None, None, None]  # (F, 1, 1, 1)
     margin = np.where(thumb, THUMB_DORSAL_MARGIN, FINGER_DORSAL_MARGIN) * first_bone
-    knuckle = base_height[..., None, None, None] + palmar[..., 0, :, None, None]
-    middle = knuckle + palmar[..., 1, None, :, None]
-    end = middle + palmar[..., 2, None, None, :]                         # heights over the palm
+    knuckle = base_height[on_signs] + palmar[0]                          # heights over the palm
+    middle = knuckle + palmar[1]
+    end = middle + palmar[2]
     dorsal = sum((np.clip(-height - margin, 0.0, None) / (DORSAL_SOFTNESS * first_bone)) ** 2
                  for height in (knuckle, middle, end))
     cost = (outside(mcp, 0) + outside(pip, 1) + outside(dip, 2) + dorsal
@@ -250,9 +234,10 @@ def finger_log_likelihood(xy: np.ndarray, abs_dz: np.ndarray, palm_z: np.ndarray
     centre, spread = np.radians(COMFORT_CENTRE_DEG), np.radians(COMFORT_SIGMA_DEG)
     comfort = (((mcp - centre) / spread) ** 2 + ((pip - centre) / spread) ** 2
                + ((dip - centre) / spread) ** 2)
-    states = cost.shape[:-3] + (len(SIGN_STATES),)
-    return (np.nan_to_num(-0.5 * cost).reshape(states),
-            np.nan_to_num(-0.5 * comfort).reshape(states))
+    shape = np.broadcast_shapes(cost.shape, comfort.shape)
+    states = shape[:-3] + (len(SIGN_STATES),)
+    return (np.nan_to_num(-0.5 * np.broadcast_to(cost, shape)).reshape(states),
+            np.nan_to_num(-0.5 * np.broadcast_to(comfort, shape)).reshape(states))
 
 
 def bone_log_odds(log_likelihood: np.ndarray) -> np.ndarray:
@@ -272,8 +257,43 @@ def _log_evidence(log_likelihood: np.ndarray) -> np.ndarray:
     return peak + np.log(np.exp(log_likelihood - peak[..., None]).sum(axis=-1))
 
 
-def resolve_signs(xy: np.ndarray, abs_dz: np.ndarray, bone_lengths: np.ndarray,
-                  skeleton: Skeleton, hand: str) -> tuple[np.ndarray, np.ndarray, float]:
+@dataclass(frozen=True)
+class SignSolution:
+    """The depth signs :func:`resolve_signs` settled on.
+
+    Attributes
+    ----------
+    signs
+        ``(T, J) float64`` of ±1 (``+``: the child is farther from the camera); NaN at the
+        root.
+    confidence
+        ``(T, J) float64`` in [0.5, 1]; NaN at the root.
+    mirror_log_odds
+        Log-odds of the chosen signs against their clip-wide mirror (>= 0).
+    palm_state
+        ``(T,) int64``: the palm state (0 or 1) of ``candidates`` chosen in each frame.
+    finger_signs
+        ``(T, F, 3) float64`` of ±1: the signs of each finger's bones below the palm.
+    candidates
+        The candidates the signs were chosen from.
+    """
+
+    signs: np.ndarray
+    confidence: np.ndarray
+    mirror_log_odds: float
+    palm_state: np.ndarray
+    finger_signs: np.ndarray
+    candidates: FingerCandidates
+
+
+def resolve_signs(
+    xy: np.ndarray,
+    abs_dz: np.ndarray,
+    bone_lengths: np.ndarray,
+    skeleton: Skeleton,
+    hand: str,
+    candidates_for: Callable[[np.ndarray], FingerCandidates] | None = None,
+) -> SignSolution:
     """Depth sign of every bone, its confidence and the odds against the mirror.
 
     Parameters
@@ -286,26 +306,27 @@ def resolve_signs(xy: np.ndarray, abs_dz: np.ndarray, bone_lengths: np.ndarray,
         ``(J,) float64``, clip units.
     skeleton, hand
         The clip's skeleton and hand.
+    candidates_for
+        Builds the finger candidates from the palm's sign pattern ``(T, P)`` (state 0;
+        state 1 is its mirror). Default: orthographic candidates from ``xy`` and
+        ``abs_dz``.
 
     Returns
     -------
-    signs
-        ``(T, J) float64`` of ±1 (``+``: the child is farther from the camera); NaN at the
-        root.
-    confidence
-        ``(T, J) float64`` in [0.5, 1]; NaN at the root.
-    mirror_log_odds
-        Log-odds of the chosen signs against their clip-wide mirror (>= 0).
+    SignSolution
     """
     layout = hand_layout(skeleton)
     n_frames = len(xy)
     palm = palm_signs(xy, abs_dz, skeleton, layout)                      # (T, P)
-    palm_dz = np.zeros((n_frames, skeleton.n_joints))
-    palm_dz[:, layout.palm_bones] = palm * abs_dz[:, layout.palm_bones]
-    palm_z0 = accumulate_depths(palm_dz, skeleton)
-    palm_z = np.stack([palm_z0, -palm_z0], axis=1)
-    anatomy, comfort = finger_log_likelihood(xy, abs_dz, palm_z, bone_lengths, skeleton,
-                                              layout, hand)
+    if candidates_for is None:
+        palm_dz = np.zeros((n_frames, skeleton.n_joints))
+        palm_dz[:, layout.palm_bones] = palm * abs_dz[:, layout.palm_bones]
+        palm_z = accumulate_depths(palm_dz, skeleton)
+        candidates = orthographic_candidates(xy, abs_dz, np.stack([palm_z, -palm_z], axis=1),
+                                             skeleton, layout)
+    else:
+        candidates = candidates_for(palm)
+    anatomy, comfort = finger_log_likelihood(candidates, bone_lengths, layout, hand)
     log_lik = anatomy + comfort
 
     evidence = _log_evidence(log_lik).sum(axis=-1)                      # (T, 2)
@@ -329,45 +350,77 @@ def resolve_signs(xy: np.ndarray, abs_dz: np.ndarray, bone_lengths: np.ndarray,
     own = anatomy[frames, state[:, None], fingers, best]
     mirror = anatomy[frames, 1 - state[:, None], fingers, len(SIGN_STATES) - 1 - best]
     mirror_log_odds = float(np.sum(own - mirror))
-    palm_sign = 1.0 - 2.0 * state
     if mirror_log_odds < 0:
-        mirror_log_odds, palm_sign, finger_signs = (-mirror_log_odds, -palm_sign,
-                                                    -finger_signs)
+        mirror_log_odds, state, finger_signs = -mirror_log_odds, 1 - state, -finger_signs
     p_mirror = sigmoid(-mirror_log_odds)
 
     signs = np.full((n_frames, skeleton.n_joints), np.nan)
-    signs[:, layout.palm_bones] = palm * palm_sign[:, None]
+    signs[:, layout.palm_bones] = palm * (1.0 - 2.0 * state)[:, None]
     signs[:, layout.chains] = finger_signs
     confidence = np.full(signs.shape, np.nan)
     confidence[:, layout.palm_bones] = sigmoid(np.abs(palm_odds))[:, None]
     confidence[:, layout.chains] = sigmoid(np.abs(finger_odds))
     confidence = confidence * (1.0 - p_mirror) + (1.0 - confidence) * p_mirror
-    return signs, np.clip(confidence, 0.5, 1.0), mirror_log_odds
+    return SignSolution(signs=signs, confidence=np.clip(confidence, 0.5, 1.0),
+                        mirror_log_odds=mirror_log_odds, palm_state=state,
+                        finger_signs=finger_signs, candidates=candidates)
+
+
+def _chosen_points(solution: SignSolution, skeleton: Skeleton) -> np.ndarray:
+    """Joint positions of a pinhole solution, picked from its candidates, ``(T, J, 3)``."""
+    layout = hand_layout(skeleton)
+    candidates = solution.candidates
+    frames = np.arange(len(solution.palm_state))
+    xyz = candidates.palm[frames, solution.palm_state].copy()
+    pick = (solution.finger_signs < 0).astype(np.int64)                  # (T, F, 3)
+    frame, finger = frames[:, None], np.arange(len(layout.fingers))[None, :]
+    first, second, third = candidates.joints
+    state = solution.palm_state[:, None]
+    xyz[:, layout.chains[:, 0]] = first[frame, state, finger, pick[..., 0]]
+    xyz[:, layout.chains[:, 1]] = second[frame, state, finger, pick[..., 0], pick[..., 1]]
+    xyz[:, layout.chains[:, 2]] = third[frame, state, finger, pick[..., 0], pick[..., 1],
+                                        pick[..., 2]]
+    return xyz
 
 
 def _lift_pinhole(uv: np.ndarray, skeleton: Skeleton, bone_lengths: np.ndarray,
                   camera: Camera, hand: str, weak_scale: np.ndarray,
-                  weak_dz: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, float]:
-    """Two perspective walks, the signs settled again between them on metric ``(x, y)``.
+                  weak_dz: np.ndarray) -> tuple[np.ndarray, np.ndarray, SignSolution]:
+    """Lift a pinhole clip: root depth from the weak-perspective lift, signs on the rays.
 
-    The first walk, seeded by the weak-perspective signs, gives every joint its metric
-    image-plane position, free of the weak-perspective distortion of a near hand; the
-    signs are then settled again on those positions and the joints walked once more.
+    The root's depth comes from :func:`handdb.lifting.pinhole.estimate_root_depth`. The
+    palm and finger candidates are then the two roots of every bone's ray quadratic
+    (:func:`handdb.lifting.finger_geometry.perspective_candidates`), so the hand prior
+    judges the poses the camera can actually have produced.
 
     Returns
     -------
-    xyz, inconsistency, confidence, mirror_log_odds
-        As :func:`walk_rays` and :func:`resolve_signs`.
+    xyz, inconsistency, solution
+        ``(T, J, 3)`` positions and ``(T, J)`` length excess, clip units; the signs.
     """
-    xyz, _ = lift_perspective(uv, skeleton, bone_lengths, camera, weak_dz, weak_scale)
-    metric_xy = xyz[..., :2] - xyz[:, skeleton.root : skeleton.root + 1, :2]
+    layout = hand_layout(skeleton)
+    depth = estimate_root_depth(uv, skeleton, bone_lengths, camera, weak_dz, weak_scale)
+    rays = camera_rays(uv, camera)
+    root = skeleton.root
+    metric_xy = (rays[..., :2] - rays[:, root : root + 1, :2]) * depth[:, None, None]
     abs_dz, _ = depth_magnitudes(projected_lengths(metric_xy, skeleton), bone_lengths,
-                                 np.ones(len(xyz)))
-    signs, confidence, mirror_log_odds = resolve_signs(metric_xy, abs_dz, bone_lengths,
-                                                       skeleton, hand)
-    xyz, inconsistency = lift_perspective(uv, skeleton, bone_lengths, camera,
-                                          signs * abs_dz, weak_scale)
-    return xyz, inconsistency, confidence, mirror_log_odds
+                                 np.ones(len(uv)))
+
+    def candidates_for(palm: np.ndarray) -> FingerCandidates:
+        palm_dz = np.full(abs_dz.shape, np.nan)
+        palm_dz[:, layout.palm_bones] = palm * abs_dz[:, layout.palm_bones]
+        states = [walk_rays(rays, depth, skeleton, bone_lengths, sign * palm_dz)[0]
+                  for sign in (1.0, -1.0)]
+        return perspective_candidates(rays, np.stack(states, axis=1), bone_lengths, layout)
+
+    solution = resolve_signs(metric_xy, abs_dz, bone_lengths, skeleton, hand, candidates_for)
+    xyz = _chosen_points(solution, skeleton)
+    parent, child = skeleton.bones.T
+    inconsistency = np.zeros(abs_dz.shape)
+    inconsistency[:, child] = np.clip(
+        np.linalg.norm(xyz[:, child] - xyz[:, parent], axis=-1) - bone_lengths[child], 0.0,
+        None)
+    return xyz, inconsistency, solution
 
 
 def lift_kinematic(uv: np.ndarray, skeleton: Skeleton, bone_lengths: np.ndarray,
@@ -381,19 +434,20 @@ def lift_kinematic(uv: np.ndarray, skeleton: Skeleton, bone_lengths: np.ndarray,
     scale = smooth_scale(eq6_scale(projected, bone_lengths))
     abs_dz, inconsistency = depth_magnitudes(projected, bone_lengths, scale)
     xy = image / scale[:, None, None]
-    signs, confidence, mirror_log_odds = resolve_signs(xy, abs_dz, bone_lengths, skeleton, hand)
+    solution = resolve_signs(xy, abs_dz, bone_lengths, skeleton, hand)
     if camera.model == "pinhole":
-        xyz, inconsistency, confidence, mirror_log_odds = _lift_pinhole(
-            uv, skeleton, bone_lengths, camera, hand, scale, signs * abs_dz)
+        xyz, inconsistency, solution = _lift_pinhole(
+            uv, skeleton, bone_lengths, camera, hand, scale, solution.signs * abs_dz)
         scale = np.full(scale.shape, np.nan)
     else:
-        xyz = orthographic_points(image, scale, accumulate_depths(signs * abs_dz, skeleton))
+        z = accumulate_depths(solution.signs * abs_dz, skeleton)
+        xyz = orthographic_points(image, scale, z)
     inconsistency[:, skeleton.root] = 0.0
-    ambiguous = mirror_log_odds < np.log(MIRROR_SETTLED_ODDS)
+    odds = solution.mirror_log_odds
+    ambiguous = odds < np.log(MIRROR_SETTLED_ODDS)
     note = (f"clip-wide mirror not settled: the chosen depth signs are only "
-            f"{np.exp(mirror_log_odds):.3g} times as likely as all of them flipped"
-            if ambiguous else "")
-    return LiftResult(xyz=xyz, sign_confidence=confidence,
+            f"{np.exp(odds):.3g} times as likely as all of them flipped" if ambiguous else "")
+    return LiftResult(xyz=xyz, sign_confidence=solution.confidence,
                       length_inconsistency=inconsistency, scale=scale, method="kinematic",
                       mirror_ambiguous=bool(ambiguous), note=note)
 

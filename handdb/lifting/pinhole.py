@@ -2,15 +2,15 @@
 
 Through a pinhole camera a joint lies on the ray ``Z · r`` with
 ``r = ((u − cx) / fx, (v − cy) / fy, 1)``. Given its parent's position ``P`` and the bone
-length ``l``, ``|Z r − P| = l`` is a quadratic in ``Z`` whose two roots are the near and far
-solutions (the reflective ambiguity, now asymmetric). Each bone takes the root nearer the depth its orthographic lift gave it (relative to
-its parent); a sign alone does not do, as the parent is seldom on the child's ray. A
-negative discriminant (the ray passes farther than ``l`` from ``P``) is clamped: the
-joint goes to the ray's point nearest ``P`` and the excess distance is recorded.
+length ``l``, ``|Z r − P| = l`` is a quadratic in ``Z`` whose two roots are the far and near
+solutions (the reflective ambiguity, now asymmetric; :func:`ray_roots`). A negative
+discriminant (the ray passes farther than ``l`` from ``P``) is clamped: the joint goes to
+the ray's point nearest ``P`` and the excess distance is recorded. Which root each bone
+takes is the hand prior's decision (:mod:`handdb.lifting.kinematic`).
 
-The root's depth is the largest for which every bone has a real solution (the perspective
-form of eq. 6), found per frame by a grid search and bisection and then made robust and smooth over time like
-the orthographic scale.
+The root's depth is the largest for which (nearly) every bone has a real solution, the
+perspective form of eq. 6, found per frame by a grid search and bisection and then made
+robust and smooth over time like the orthographic scale (:func:`estimate_root_depth`).
 """
 
 from __future__ import annotations
@@ -43,6 +43,38 @@ def camera_rays(uv: np.ndarray, camera: Camera) -> np.ndarray:
     return np.stack([x, y, np.ones_like(x)], axis=-1)
 
 
+def ray_roots(origin: np.ndarray, ray: np.ndarray,
+              length: np.ndarray | float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The two points of a ray at a given distance from a point.
+
+    Parameters
+    ----------
+    origin
+        ``(..., 3) float64``, clip units: the parent joint.
+    ray
+        ``(..., 3) float64``: the child's ray (unit depth).
+    length
+        Bone length, clip units (broadcasts against ``origin[..., 0]``).
+
+    Returns
+    -------
+    far, near
+        ``(..., 3) float64``: the points of the ray at distance ``length`` from
+        ``origin``, the deeper first; both the ray's point nearest ``origin`` when the ray
+        passes farther than ``length`` from it.
+    excess
+        ``(...) float64`` >= 0, clip units: by how much the ray misses the sphere.
+    """
+    a = np.sum(ray * ray, axis=-1)
+    b = np.sum(ray * origin, axis=-1)
+    nearest = b / a
+    miss_sq = np.clip(np.sum(origin * origin, axis=-1) - b * nearest, 0.0, None)
+    half_chord = np.sqrt(np.clip(length**2 - miss_sq, 0.0, None) / a)
+    far = ray * (nearest + half_chord)[..., None]
+    near = ray * (nearest - half_chord)[..., None]
+    return far, near, np.clip(np.sqrt(miss_sq) - length, 0.0, None)
+
+
 def walk_rays(rays: np.ndarray, root_depth: np.ndarray, skeleton: Skeleton,
               bone_lengths: np.ndarray, bone_dz: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Place every joint on its ray, from the root to the tips.
@@ -53,11 +85,14 @@ def walk_rays(rays: np.ndarray, root_depth: np.ndarray, skeleton: Skeleton,
         ``(T, J, 3) float64`` from :func:`camera_rays`.
     root_depth
         ``(T,) float64``, clip units: depth ``Z`` of the root.
+    skeleton
+        Gives the tree.
     bone_lengths
         ``(J,) float64``, clip units.
     bone_dz
         ``(T, J) float64``, clip units: each bone's depth relative to its parent as first
-        estimated; the root of the bone's quadratic nearer to it is taken.
+        estimated; of the two points :func:`ray_roots` offers, the one whose depth is
+        nearer the parent's plus ``bone_dz`` is taken.
 
     Returns
     -------
@@ -74,17 +109,12 @@ def walk_rays(rays: np.ndarray, root_depth: np.ndarray, skeleton: Skeleton,
         parent = skeleton.parents[joint]
         if parent < 0:
             continue
-        ray, origin = rays[:, joint], xyz[:, parent]
-        a = np.sum(ray * ray, axis=-1)
-        b = np.sum(ray * origin, axis=-1)
-        nearest = b / a
-        miss_sq = np.clip(np.sum(origin * origin, axis=-1) - b * nearest, 0.0, None)
-        length = bone_lengths[joint]
-        half_chord = np.sqrt(np.clip(length**2 - miss_sq, 0.0, None) / a)
+        origin = xyz[:, parent]
+        far, near, excess = ray_roots(origin, rays[:, joint], bone_lengths[joint])
         wanted = origin[:, 2] + bone_dz[:, joint]
-        side = np.where(wanted >= nearest, 1.0, -1.0)
-        xyz[:, joint] = ray * (nearest + side * half_chord)[:, None]
-        inconsistency[:, joint] = np.clip(np.sqrt(miss_sq) - length, 0.0, None)
+        pick_far = np.abs(far[:, 2] - wanted) <= np.abs(near[:, 2] - wanted)
+        xyz[:, joint] = np.where(pick_far[:, None], far, near)
+        inconsistency[:, joint] = excess
     return xyz, inconsistency
 
 
@@ -135,15 +165,18 @@ def deepest_feasible_root(rays: np.ndarray, guess: np.ndarray, skeleton: Skeleto
     return np.exp(low)
 
 
-def lift_perspective(uv: np.ndarray, skeleton: Skeleton, bone_lengths: np.ndarray,
-                     camera: Camera, bone_dz: np.ndarray,
-                     weak_scale: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Lift a pinhole clip whose bone signs are known.
+def estimate_root_depth(uv: np.ndarray, skeleton: Skeleton, bone_lengths: np.ndarray,
+               camera: Camera, bone_dz: np.ndarray, weak_scale: np.ndarray) -> np.ndarray:
+    """Depth of the root per frame: the perspective eq. 6, robust and smooth over time.
 
     Parameters
     ----------
     uv
         ``(T, J, 2) float64``, pixels.
+    skeleton, bone_lengths
+        The clip's skeleton and bone lengths (clip units).
+    camera
+        A pinhole camera.
     bone_dz
         ``(T, J) float64``, clip units: signed depth of each bone from the weak-perspective
         lift (see :func:`walk_rays`).
@@ -153,11 +186,10 @@ def lift_perspective(uv: np.ndarray, skeleton: Skeleton, bone_lengths: np.ndarra
 
     Returns
     -------
-    xyz, inconsistency
-        As :func:`walk_rays`.
+    numpy.ndarray
+        ``(T,) float64``, clip units.
     """
-    rays = camera_rays(uv, camera)
     focal = 0.5 * (camera.fx + camera.fy)
-    bound = deepest_feasible_root(rays, focal / weak_scale, skeleton, bone_lengths, bone_dz)
-    root_depth = 1.0 / smooth_scale(1.0 / bound)
-    return walk_rays(rays, root_depth, skeleton, bone_lengths, bone_dz)
+    bound = deepest_feasible_root(camera_rays(uv, camera), focal / weak_scale, skeleton,
+                                  bone_lengths, bone_dz)
+    return 1.0 / smooth_scale(1.0 / bound)
