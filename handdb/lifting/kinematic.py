@@ -97,6 +97,10 @@ DORSAL_SOFTNESS = 0.1
 COMFORT_CENTRE_DEG = 15.0
 COMFORT_SIGMA_DEG = 45.0
 
+#: Rounds of root depth and sign estimation for a pinhole clip (each round's signs give
+#: the next round's root depth).
+PINHOLE_PASSES = 2
+
 #: Ridge added to the palm plane's normal equations (clip units²) so that a palm seen
 #: edge-on, its joints on one image line, still has a plane.
 PLANE_RIDGE = 1e-9
@@ -399,23 +403,29 @@ def _lift_pinhole(uv: np.ndarray, skeleton: Skeleton, bone_lengths: np.ndarray,
         ``(T, J, 3)`` positions and ``(T, J)`` length excess, clip units; the signs.
     """
     layout = hand_layout(skeleton)
-    depth = estimate_root_depth(uv, skeleton, bone_lengths, camera, weak_dz, weak_scale)
     rays = camera_rays(uv, camera)
     root = skeleton.root
-    metric_xy = (rays[..., :2] - rays[:, root : root + 1, :2]) * depth[:, None, None]
-    abs_dz, _ = depth_magnitudes(projected_lengths(metric_xy, skeleton), bone_lengths,
-                                 np.ones(len(uv)))
-
-    def candidates_for(palm: np.ndarray) -> FingerCandidates:
-        palm_dz = np.full(abs_dz.shape, np.nan)
-        palm_dz[:, layout.palm_bones] = palm * abs_dz[:, layout.palm_bones]
-        states = [walk_rays(rays, depth, skeleton, bone_lengths, sign * palm_dz)[0]
-                  for sign in (1.0, -1.0)]
-        return perspective_candidates(rays, np.stack(states, axis=1), bone_lengths, layout)
-
-    solution = resolve_signs(metric_xy, abs_dz, bone_lengths, skeleton, hand, candidates_for)
-    xyz = _chosen_points(solution, skeleton)
     parent, child = skeleton.bones.T
+    bone_dz = weak_dz
+    for _ in range(PINHOLE_PASSES):
+        depth = estimate_root_depth(uv, skeleton, bone_lengths, camera, bone_dz, weak_scale)
+        metric_xy = (rays[..., :2] - rays[:, root : root + 1, :2]) * depth[:, None, None]
+        abs_dz, _ = depth_magnitudes(projected_lengths(metric_xy, skeleton), bone_lengths,
+                                     np.ones(len(uv)))
+
+        def candidates_for(palm: np.ndarray, depth=depth, abs_dz=abs_dz) -> FingerCandidates:
+            palm_dz = np.full(abs_dz.shape, np.nan)
+            palm_dz[:, layout.palm_bones] = palm * abs_dz[:, layout.palm_bones]
+            states = [walk_rays(rays, depth, skeleton, bone_lengths, sign * palm_dz)[0]
+                      for sign in (1.0, -1.0)]
+            return perspective_candidates(rays, np.stack(states, axis=1), bone_lengths,
+                                          layout)
+
+        solution = resolve_signs(metric_xy, abs_dz, bone_lengths, skeleton, hand,
+                                 candidates_for)
+        xyz = _chosen_points(solution, skeleton)
+        bone_dz = np.full(abs_dz.shape, np.nan)
+        bone_dz[:, child] = xyz[:, child, 2] - xyz[:, parent, 2]
     inconsistency = np.zeros(abs_dz.shape)
     inconsistency[:, child] = np.clip(
         np.linalg.norm(xyz[:, child] - xyz[:, parent], axis=-1) - bone_lengths[child], 0.0,

@@ -15,6 +15,7 @@ Every joint gets a position, tracked or not: the model fills joints without an i
 
 from __future__ import annotations
 
+import itertools
 from typing import Any
 
 import numpy as np
@@ -24,6 +25,7 @@ from scipy.spatial.transform import Rotation
 from handdb.clip import Camera
 from handdb.fitting import MARKER_WEIGHT, MAX_EVALUATIONS, SMOOTHNESS_WEIGHT, SOLVER_TOLERANCE
 from handdb.kinematics import (
+    AXES,
     N_DOF,
     ROOT_POSITION,
     ROOT_ROTATION,
@@ -48,10 +50,12 @@ MIN_POINTS = 4
 #: Index of the log-scale parameter appended to the pose for orthographic cameras.
 LOG_SCALE = N_DOF
 
-#: Root orientations tried on the first frame, degrees about the camera's z axis after
-#: turning the palm towards or away from the camera.
+#: Starts tried on the first frame: the palm turned towards or away from the camera, tilted
+#: about the camera's x and y axes (degrees), and every finger joint flexed by each angle.
 FIRST_FRAME_TURNS_DEG = (0.0, 180.0)
-FIRST_FRAME_TILTS_DEG = (-30.0, 30.0)
+FIRST_FRAME_TILTS_DEG = (-45.0, -15.0, 15.0, 45.0)
+FIRST_FRAME_ROLLS_DEG = (-30.0, 0.0, 30.0)
+FIRST_FRAME_FLEXION_DEG = (0.0, 35.0)
 
 #: Finite-difference step of the Jacobian.
 JACOBIAN_STEP = 1e-6
@@ -154,19 +158,21 @@ def _first_frame(model: HandModel, camera: Camera, uv: np.ndarray,
         start[:2] = centre / np.exp(start[LOG_SCALE])
     pointing = (uv[middle] - uv[root]) if seen[[root, middle]].all() else np.array([0.0, -1.0])
     in_plane = np.degrees(np.arctan2(pointing[0], -pointing[1]))
+    flexion = 6 + np.flatnonzero(model.dof_axis == AXES.index("flexion"))
     best, best_cost = start, np.inf
-    for turn in FIRST_FRAME_TURNS_DEG:
-        for tilt in FIRST_FRAME_TILTS_DEG:
-            rotation = Rotation.from_euler("zyx", [in_plane, turn, tilt + 180.0],
-                                           degrees=True)
-            candidate = start.copy()
-            candidate[ROOT_ROTATION] = rotation.as_rotvec()
-            placed = _positions(model, candidate, camera)
-            offset = placed.mean(axis=0) - placed[root]
-            candidate[:2] -= offset[:2]
-            fitted, cost = _fit_frame(model, camera, uv, seen, candidate, None)
-            if cost < best_cost:
-                best, best_cost = fitted, cost
+    for turn, tilt, roll, bend in itertools.product(
+            FIRST_FRAME_TURNS_DEG, FIRST_FRAME_TILTS_DEG, FIRST_FRAME_ROLLS_DEG,
+            FIRST_FRAME_FLEXION_DEG):
+        rotation = Rotation.from_euler("zyx", [in_plane, turn + roll, tilt + 180.0],
+                                       degrees=True)
+        candidate = start.copy()
+        candidate[ROOT_ROTATION] = rotation.as_rotvec()
+        candidate[flexion] = np.radians(bend)
+        placed = _positions(model, candidate, camera)
+        candidate[:2] -= placed.mean(axis=0)[:2] - placed[root, :2]
+        fitted, cost = _fit_frame(model, camera, uv, seen, candidate, None)
+        if cost < best_cost:
+            best, best_cost = fitted, cost
     return best
 
 
