@@ -30,6 +30,11 @@ DEPTH_GRID = 48
 #: Bisection steps refining the deepest feasible candidate (each halves a grid step).
 BISECTION_STEPS = 12
 
+#: Smoothing of the per-frame root depth bounds (of their inverses, as for the scale):
+#: the median over +-40 frames (chosen on synthetic rapid gestures, seeds 0-2).
+ROOT_DEPTH_PERCENTILE = 50.0
+ROOT_DEPTH_HALF_WINDOW = 40
+
 #: A root depth counts as feasible while the bones' total excess (see :func:`walk_rays`)
 #: stays below this share of their total length: near the true depth the exactly feasible
 #: depths form narrow islands, so a strict test would stop short of them.
@@ -192,4 +197,4 @@ def estimate_root_depth(uv: np.ndarray, skeleton: Skeleton, bone_lengths: np.nda
     focal = 0.5 * (camera.fx + camera.fy)
     bound = deepest_feasible_root(camera_rays(uv, camera), focal / weak_scale, skeleton,
                                   bone_lengths, bone_dz)
-    return 1.0 / smooth_scale(1.0 / bound)
+    return 1.0 / smooth_scale(1.0 / bound, ROOT_DEPTH_PERCENTILE, ROOT_DEPTH_HALF_WINDOW)

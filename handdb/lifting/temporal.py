@@ -120,14 +120,19 @@ def sign_posterior(log_odds: np.ndarray, flip_cost: np.ndarray) -> np.ndarray:
     return np.clip(log_joint[..., 0] - log_joint[..., 1], -MAX_LOG_ODDS, MAX_LOG_ODDS)
 
 
-def smooth_scale(bounds: np.ndarray) -> np.ndarray:
-    """A scale per frame from per-frame lower bounds, robust to outliers and smooth.
+def smooth_scale(bounds: np.ndarray, percentile: float = SCALE_PERCENTILE,
+                 half_window: int = SCALE_HALF_WINDOW) -> np.ndarray:
+    """Estimate a scale per frame from per-frame lower bounds, robust and smooth.
 
     Parameters
     ----------
     bounds
         ``(T,) float64``: for each frame a lower bound of its scale (eq. 6); NaN where
         none.
+    percentile
+        Percentile of the bounds in the window taken as the scale.
+    half_window
+        Frames on each side of a frame that inform its scale.
 
     Returns
     -------
@@ -141,8 +146,7 @@ def smooth_scale(bounds: np.ndarray) -> np.ndarray:
         return np.full(bounds.shape, np.nan)
     index = np.arange(len(bounds))
     filled = np.interp(index, index[finite], bounds[finite])
-    window = 2 * SCALE_HALF_WINDOW + 1
-    upper = percentile_filter(filled, SCALE_PERCENTILE, size=window, mode="nearest")
+    upper = percentile_filter(filled, percentile, size=2 * half_window + 1, mode="nearest")
     return gaussian_filter1d(upper, SCALE_SMOOTHING_FRAMES, mode="nearest")
 
 
