@@ -14,7 +14,9 @@ from dataclasses import dataclass
 from functools import cache
 from typing import Any
 
+import numpy as np
 import pyarrow as pa
+import pyarrow.compute as pc
 
 from handdb.errors import SchemaError
 from handdb.paths import SCHEMAS_DIR
@@ -120,8 +122,40 @@ def conform(name: str, table: pa.Table) -> pa.Table:
             raise SchemaError(f"table '{name}': column '{fld.name}' cannot be "
                               f"{fld.type}: {exc}") from None
     result = pa.Table.from_arrays(columns, schema=target)
-    keys = [(k, "ascending") for k in table_spec(name).sort_by]
-    return result.sort_by(keys) if result.num_rows > 1 else result
+    sort_by = table_spec(name).sort_by
+    if is_sorted(result, sort_by):
+        return result
+    return result.sort_by([(k, "ascending") for k in sort_by])
+
+
+def is_sorted(table: pa.Table, keys: tuple[str, ...]) -> bool:
+    """Whether the rows are already in ascending order of ``keys`` (compared in turn).
+
+    A check in linear time that spares :func:`conform` a sort of tables built in order
+    (the pipeline's per-clip tables are) and of tables conformed twice. A key column with
+    nulls or NaN counts as unsorted, so the sort decides where those go.
+    """
+    n_rows = table.num_rows
+    if n_rows < 2:
+        return True
+    in_order = None
+    for key in reversed(keys):
+        column = table.column(key)
+        if column.null_count:
+            return False
+        head, tail = column.slice(0, n_rows - 1), column.slice(1)
+        ahead, tied = pc.less(head, tail), pc.equal(head, tail)
+        in_order = pc.or_(ahead, tied if in_order is None else pc.and_(tied, in_order))
+    return bool(pc.all(in_order).as_py())
+
+
+def _column(value: Any, n: int) -> pa.Array:
+    """Return ``value`` as an Arrow array; a scalar is repeated ``n`` times."""
+    if isinstance(value, pa.ChunkedArray):
+        return value.combine_chunks()
+    if isinstance(value, str) or not hasattr(value, "__len__"):
+        return pa.array([value]).take(np.zeros(n, dtype=np.intp))
+    return pa.array(value, from_pandas=True)
 
 
 def from_columns(name: str, columns: dict[str, Any]) -> pa.Table:
@@ -135,11 +169,8 @@ def from_columns(name: str, columns: dict[str, Any]) -> pa.Table:
     for fld in schema(name):
         if fld.name not in columns:
             raise SchemaError(f"table '{name}': no values given for column '{fld.name}'")
-        value = columns[fld.name]
-        if isinstance(value, str) or not hasattr(value, "__len__"):
-            value = [value] * n
         try:
-            arrays[fld.name] = pa.array(value, from_pandas=True).cast(fld.type, safe=True)
+            arrays[fld.name] = _column(columns[fld.name], n).cast(fld.type, safe=True)
         except (pa.ArrowInvalid, pa.ArrowTypeError, pa.ArrowNotImplementedError) as exc:
             raise SchemaError(f"table '{name}': column '{fld.name}' cannot be "
                               f"{fld.type}: {exc}") from None

@@ -48,3 +48,31 @@ def test_conform_refuses_unsafe_casts():
         tables.from_columns("truth_3d", {
             "clip_id": "c", "frame": [0.5], "joint": ["wrist"], "joint_index": [0],
             "x": [0.0], "y": [0.0], "z": [0.0]})
+
+
+@pytest.mark.parametrize("frames, joints, expected", [
+    ([0, 0, 1, 1], [0, 1, 0, 1], True),
+    ([0, 0, 1, 1], [1, 0, 0, 1], False),
+    ([0, 1, 1, 0], [0, 0, 1, 1], False),
+    ([0, 0, 0, 0], [0, 0, 0, 0], True),
+])
+def test_is_sorted_compares_keys_in_turn(frames, joints, expected):
+    table = pa.table({"frame": frames, "joint_index": joints})
+    assert tables.is_sorted(table, ("frame", "joint_index")) is expected
+    in_order = table.sort_by([("frame", "ascending"), ("joint_index", "ascending")])
+    assert table.equals(in_order) is expected
+
+
+def test_is_sorted_leaves_nan_and_null_keys_to_the_sort():
+    assert not tables.is_sorted(pa.table({"k": [0.0, float("nan")]}), ("k",))
+    assert not tables.is_sorted(pa.table({"k": [0, None]}), ("k",))
+
+
+def test_from_columns_broadcasts_scalars_and_takes_arrow_arrays():
+    table = tables.from_columns("truth_3d", {
+        "clip_id": "c", "frame": pa.chunked_array([[0], [1]]), "joint": ["wrist", "wrist"],
+        "joint_index": pa.array([0, 0]), "x": 1.5, "y": [0.0, 0.0], "z": [3.0, 4.0],
+    })
+    assert table.column("clip_id").to_pylist() == ["c", "c"]
+    assert table.column("x").to_pylist() == [1.5, 1.5]
+    assert table.column("frame").to_pylist() == [0, 1]
