@@ -87,7 +87,7 @@ def speed(n_clips):
         fill_gaps(uv, ~hidden, skeleton, method)
         elapsed = time.perf_counter() - start
         print(f"  {method:8s} {elapsed:7.2f} s  {len(uv) / elapsed:9.0f} frames/s")
-    for rule in ("chain", "ensemble"):
+    for rule in ("chain", "regression", "lowrank"):
         start = time.perf_counter()
         fill_gaps(uv, ~hidden, skeleton, "auto", long_gaps=rule)
         elapsed = time.perf_counter() - start

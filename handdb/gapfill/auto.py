@@ -32,27 +32,56 @@ from handdb.gapfill.lowrank import DEFAULT_VARIANCE, blend_to_edges, lowrank_rec
 from handdb.gapfill.palm_frame import palm_motion, to_image, to_palm_frame
 from handdb.gapfill.refine import refine_bone_lengths
 from handdb.gapfill.registry import OFFLINE, MethodOutput, register
+from handdb.gapfill.regression import regression_fill
 from handdb.gapfill.rigid import carry_along_chains, palm_joints, place_from_rest_pose
 from handdb.skeletons import Skeleton
 
 #: Longest interior gap (frames) bridged by interpolation rather than by the other joints.
 SHORT_GAP = 8
 
-#: How long finger gaps are filled: carried with the parent bone, from the low-rank model,
-#: the mean of the two, or the two weighed by a validation on the joint's own frames.
-LONG_GAP_RULES = ("chain", "lowrank", "ensemble", "validated")
+#: Ways of filling long finger gaps from the other joints (see :func:`estimate_long_gaps`).
+ESTIMATES = ("chain", "regression", "lowrank")
+#: How long finger gaps are filled: one estimate, or several weighed by validation.
+LONG_GAP_RULES = (*ESTIMATES, "validated")
+#: The estimates weighed by ``"validated"``.
+VALIDATED_ESTIMATES = ("chain", "regression")
 
-#: Observed runs per joint hidden to weigh the long-gap rules against each other.
+#: Observed runs per joint hidden to weigh the long-gap estimates against each other.
 VALIDATION_GAPS = 3
 
 
-def _chain_and_lowrank(
-    local: np.ndarray, filled: np.ndarray, missing: np.ndarray, gaps: Gaps,
-    skeleton: Skeleton, variance: float,
-) -> tuple[np.ndarray, np.ndarray]:
+def estimate_long_gaps(
+    estimate: str, local: np.ndarray, filled: np.ndarray, missing: np.ndarray, gaps: Gaps,
+    skeleton: Skeleton, variance: float = DEFAULT_VARIANCE,
+) -> np.ndarray:
+    """Fill long finger ``gaps`` by one of :data:`ESTIMATES`.
+
+    Parameters
+    ----------
+    estimate
+        ``"chain"`` (:func:`~handdb.gapfill.rigid.carry_along_chains`), ``"regression"``
+        (:func:`~handdb.gapfill.regression.regression_fill` on the finger joints, the chain
+        where it cannot) or ``"lowrank"`` (:mod:`handdb.gapfill.lowrank`).
+    local
+        ``(T, J, 2)`` tracks in the palm frame, NaN where missing.
+    filled
+        ``local`` with the palm points and short gaps already filled.
+    missing, gaps, skeleton, variance
+        The missing points, the gaps to fill, the skeleton, the low-rank variance share.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(T, J, 2)``: ``filled`` with ``gaps`` filled.
+    """
     chain = carry_along_chains(filled, missing, gaps, skeleton)
+    if estimate == "chain":
+        return chain
+    if estimate == "regression":
+        regressed = regression_fill(filled, missing, gaps, ~palm_joints(skeleton))
+        return np.where(np.isnan(regressed), chain, regressed)
     model = lowrank_reconstruct(local, missing, variance=variance)
-    return chain, blend_to_edges(filled, model, gaps)
+    return blend_to_edges(filled, model, gaps)
 
 
 def validation_mask(missing: np.ndarray, gaps: Gaps, seed: int = 0) -> np.ndarray:
@@ -85,25 +114,24 @@ def _long_gap_fill(
     local: np.ndarray, filled: np.ndarray, missing: np.ndarray, gaps: Gaps,
     skeleton: Skeleton, rule: str, variance: float,
 ) -> np.ndarray:
-    if rule == "chain":
-        return carry_along_chains(filled, missing, gaps, skeleton)
-    chain, lowrank = _chain_and_lowrank(local, filled, missing, gaps, skeleton, variance)
-    if rule == "lowrank":
-        return lowrank
-    if rule == "ensemble":
-        return (chain + lowrank) / 2
+    if rule != "validated":
+        return estimate_long_gaps(rule, local, filled, missing, gaps, skeleton, variance)
     hidden = validation_mask(missing, gaps)
     trial_missing = missing | hidden
     trial_local = np.where(hidden[..., None], np.nan, local)
     trial_filled = np.where(hidden[..., None], interpolate_gaps(trial_local, trial_missing), filled)
     trial_gaps = find_gaps(hidden)
-    trial_chain, trial_lowrank = _chain_and_lowrank(
-        trial_local, trial_filled, trial_missing, trial_gaps, skeleton, variance)
-    chain_error = np.nansum(np.where(hidden, np.sum((trial_chain - local) ** 2, -1), 0), axis=0)
-    lowrank_error = np.nansum(np.where(hidden, np.sum((trial_lowrank - local) ** 2, -1), 0), axis=0)
-    total = chain_error + lowrank_error
-    lowrank_share = np.where(total > 0, chain_error / np.where(total > 0, total, 1), 0.5)
-    return chain + lowrank_share[None, :, None] * (lowrank - chain)
+    inverse_errors, estimates = [], []
+    for estimate in VALIDATED_ESTIMATES:
+        trial = estimate_long_gaps(estimate, trial_local, trial_filled, trial_missing,
+                                   trial_gaps, skeleton, variance)
+        error = np.sum(np.where(hidden, np.sum((trial - local) ** 2, axis=-1), 0.0), axis=0)
+        inverse_errors.append(1.0 / np.maximum(error, np.finfo(float).tiny))
+        estimates.append(estimate_long_gaps(estimate, local, filled, missing, gaps, skeleton,
+                                            variance))
+    weights = np.array(inverse_errors) / np.sum(inverse_errors, axis=0)
+    weights = np.where(hidden.any(axis=0), weights, 1.0 / len(estimates))
+    return np.einsum("ej,etjk->tjk", weights, np.array(estimates))
 
 
 @register("auto", OFFLINE, "default: rigid palm, PCHIP short gaps, validated chain/low-rank")
