@@ -38,7 +38,7 @@ def projected_lengths(uv: np.ndarray, skeleton: Skeleton) -> np.ndarray:
     return np.linalg.norm(bone_vectors_2d(uv, skeleton), axis=-1)
 
 
-def eq6_scale(projected: np.ndarray, bone_lengths: np.ndarray) -> np.ndarray:
+def eq6_scale(projected: np.ndarray, bone_lengths: np.ndarray, rank: int = 1) -> np.ndarray:
     """The thesis's scale (eq. 6): the smallest ``s`` giving every bone a real depth.
 
     ``s >= p / l`` for every bone, so the smallest admissible scale of a frame is the
@@ -51,16 +51,19 @@ def eq6_scale(projected: np.ndarray, bone_lengths: np.ndarray) -> np.ndarray:
         ``(T, J) float64`` image bone lengths, pixels.
     bone_lengths
         ``(J,) float64`` bone lengths, clip units; NaN at the root.
+    rank
+        1 gives eq. 6; ``k`` gives the ``k``-th largest ratio, the smallest scale at which
+        all but ``k − 1`` bones have a real depth (robust to ``k − 1`` outlier bones).
 
     Returns
     -------
     numpy.ndarray
-        ``(T,) float64``, pixels per clip unit; NaN for frames without a finite ratio.
+        ``(T,) float64``, pixels per clip unit; NaN for frames with fewer than ``rank``
+        finite ratios.
     """
     ratio = projected / bone_lengths
-    finite = np.isfinite(ratio)
-    best = np.max(np.where(finite, ratio, -np.inf), axis=1)
-    return np.where(finite.any(axis=1), best, np.nan)
+    ranked = -np.sort(np.where(np.isfinite(ratio), -ratio, np.inf), axis=1)
+    return np.where(np.isfinite(ranked[:, rank - 1]), ranked[:, rank - 1], np.nan)
 
 
 def depth_magnitudes(

@@ -1,7 +1,9 @@
 """The default lifting method, ``kinematic``: depth signs settled with what hands can do.
 
-Per frame, the unsigned depth of every bone follows from eq. 5 at a robust, smoothed scale
-(:func:`handdb.lifting.temporal.smooth_scale`). The signs are then chosen in three steps:
+Per frame, the unsigned depth of every bone follows from eq. 5 at a robust, smoothed scale:
+the second-largest ratio of image to bone length (one outlier bone allowed), then an upper
+percentile over a window of frames (:func:`handdb.lifting.temporal.smooth_scale`). The
+signs are then chosen in three steps:
 
 1. **Palm.** The palm (wrist, carpometacarpal and long-finger MCP joints) is near rigid and
    near planar: of the sign patterns of its bones, the one whose joints fit a plane best is
@@ -104,6 +106,10 @@ PINHOLE_PASSES = 2
 #: Ridge added to the palm plane's normal equations (clip units²) so that a palm seen
 #: edge-on, its joints on one image line, still has a plane.
 PLANE_RIDGE = 1e-9
+
+#: The scale of a frame lets its most stretched bone be an outlier (see
+#: :func:`handdb.lifting.geometry.eq6_scale`): trackers' bones vary in length.
+SCALE_RANK = 2
 
 #: Smallest spread of a bone's frame-to-frame depth change, as a share of its length.
 TEMPORAL_FLOOR = 0.05
@@ -441,7 +447,7 @@ def lift_kinematic(uv: np.ndarray, skeleton: Skeleton, bone_lengths: np.ndarray,
     """
     image = centred_pixels(uv, camera)
     projected = projected_lengths(image, skeleton)
-    scale = smooth_scale(eq6_scale(projected, bone_lengths))
+    scale = smooth_scale(eq6_scale(projected, bone_lengths, rank=SCALE_RANK))
     abs_dz, inconsistency = depth_magnitudes(projected, bone_lengths, scale)
     xy = image / scale[:, None, None]
     solution = resolve_signs(xy, abs_dz, bone_lengths, skeleton, hand)
