@@ -24,6 +24,7 @@ import pyarrow as pa
 from prefect import flow, get_run_logger, task
 from prefect.artifacts import create_markdown_artifact
 from prefect.cache_policies import NO_CACHE
+from prefect.futures import PrefectFuture, wait
 from prefect.task_runners import ThreadPoolTaskRunner
 
 from handdb import __version__, pipeline, progress, tables
@@ -157,15 +158,26 @@ def artifact_key(kind: str, clip_id: str) -> str:
 
 
 def _run_clip_chain(entry: Any, key: str, db: str, inbox: str, ratios: pa.Table,
-                    options: pipeline.BuildOptions) -> Any:
+                    options: pipeline.BuildOptions) -> dict[str, PrefectFuture]:
+    """Submit one clip's stages; return their futures by stage name, in order (commit last)."""
     clip_id = entry.clip_id
-    result = ingest.submit(entry, clip_id, key)
-    result = bone_lengths.submit(result, clip_id, ratios)
-    result = gap_fill.submit(result, clip_id, options)
-    result = lift.submit(result, clip_id, options)
-    result = validate.submit(result, clip_id)
-    result = export.submit(result, clip_id, db, options)
-    return commit.submit(result, clip_id, db, inbox)
+    chain = {"ingest": ingest.submit(entry, clip_id, key)}
+    chain["bone-lengths"] = bone_lengths.submit(chain["ingest"], clip_id, ratios)
+    chain["gap-fill"] = gap_fill.submit(chain["bone-lengths"], clip_id, options)
+    chain["lift"] = lift.submit(chain["gap-fill"], clip_id, options)
+    chain["validate"] = validate.submit(chain["lift"], clip_id)
+    chain["export"] = export.submit(chain["validate"], clip_id, db, options)
+    chain["commit"] = commit.submit(chain["export"], clip_id, db, inbox)
+    return chain
+
+
+def _chain_failure(chain: dict[str, PrefectFuture]) -> str | None:
+    """Why a clip's chain did not complete (its first failed stage), or ``None``."""
+    if chain["commit"].state.is_completed():
+        return None
+    stage, future = next((stage, future) for stage, future in chain.items()
+                         if not future.state.is_completed())
+    return f"{stage}: {future.state.message or future.state.name}"
 
 
 def task_runner(runner: str = "thread", workers: int = DEFAULT_WORKERS,
@@ -242,19 +254,20 @@ def build(
         t0 = time.perf_counter()
         window = max(1, window)
         for start in range(0, len(todo), window):
-            futures = {entry.clip_id: _run_clip_chain(entry, key, db, inbox, ratios, options)
-                       for entry, key in todo[start:start + window]}
-            for clip_id, future in futures.items():
-                future.wait()
-                outcome = future.result(raise_on_failure=False)
-                if isinstance(outcome, Refusal):
+            chains = {entry.clip_id: _run_clip_chain(entry, key, db, inbox, ratios, options)
+                      for entry, key in todo[start:start + window]}
+            for clip_id, chain in chains.items():
+                wait(list(chain.values()))
+                failure = _chain_failure(chain)
+                outcome = None if failure else chain["commit"].result()
+                if failure:
+                    summary.failed[clip_id] = failure
+                    progress.advance(clip_id, "failed")
+                    logger.error("clip %s failed: %s", clip_id, failure)
+                elif isinstance(outcome, Refusal):
                     summary.refusals.append(outcome)
                     progress.advance(clip_id, "refused")
                     logger.warning("clip %s refused: %s", clip_id, outcome)
-                elif isinstance(outcome, BaseException) or not future.state.is_completed():
-                    summary.failed[clip_id] = str(outcome)
-                    progress.advance(clip_id, "failed")
-                    logger.error("clip %s failed: %s", clip_id, outcome)
                 else:
                     summary.processed.append(clip_id)
                     summary.n_frames += outcome.clip.n_frames

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import hashlib
 import json
+import shutil
 import tempfile
 from dataclasses import asdict, dataclass, replace
 from functools import cache
@@ -186,10 +187,15 @@ def validate(result: ClipResult) -> ClipResult:
 
 
 def _put(store: Store, local: Path, *parts: str) -> str:
-    """Copy a local file into the database; return its path relative to the database."""
+    """Move a local file into the database; return its path relative to the database.
+
+    Within one local filesystem the move is a rename (atomic); across filesystems it is a
+    copy. A file cut short by a killed build belongs to an uncommitted clip, which the
+    next build writes again.
+    """
     store.fs.makedirs(store.path(*parts[:-1]), exist_ok=True)
     if store.is_local:
-        local.replace(store.path(*parts))
+        shutil.move(local, store.path(*parts))
     else:
         store.fs.put_file(str(local), store.path(*parts))
     return "/".join(parts)
