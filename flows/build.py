@@ -26,6 +26,7 @@ from prefect.artifacts import create_markdown_artifact
 from prefect.cache_policies import NO_CACHE
 from prefect.futures import PrefectFuture, wait
 from prefect.task_runners import ThreadPoolTaskRunner
+from threadpoolctl import threadpool_limits
 
 from handdb import __version__, pipeline, progress, tables
 from handdb.quarantine import Refusal, quarantine_table
@@ -36,6 +37,10 @@ from handdb.validation import clip_summary
 #: Clips whose task chains run at once; bounds memory and the thread pool's queue.
 WINDOW_PER_WORKER = 2
 DEFAULT_WORKERS = 4
+#: BLAS threads per process during a build. Clips already run in parallel and the stages'
+#: matrices are small (a few dozen columns), so threaded BLAS only made the workers spin
+#: against each other: gap filling ran 6x slower with OpenBLAS's default thread count.
+BLAS_THREADS = 1
 
 
 def _retry_on_io(task: Any, task_run: Any, state: Any) -> bool:
@@ -228,7 +233,7 @@ def build(
     options = pipeline.BuildOptions(gap_fill=gap_fill, lift=lift, export_usd=export_usd)
     summary = BuildSummary(run_id=uuid.uuid4().hex[:12], inbox=inbox, db=db)
     store = Store(db)
-    with store.lock():
+    with store.lock(), threadpool_limits(limits=BLAS_THREADS, user_api="blas"):
         removed = store.remove_temporaries()
         if removed:
             logger.warning("removed %d half-written files left by an interrupted build", removed)
