@@ -51,17 +51,17 @@ VALIDATION_GAPS = 3
 
 
 def estimate_long_gaps(
-    estimate: str, local: np.ndarray, filled: np.ndarray, missing: np.ndarray, gaps: Gaps,
-    skeleton: Skeleton, variance: float = DEFAULT_VARIANCE,
-) -> np.ndarray:
-    """Fill long finger ``gaps`` by one of :data:`ESTIMATES`.
+    estimates: tuple[str, ...], local: np.ndarray, filled: np.ndarray, missing: np.ndarray,
+    gaps: Gaps, skeleton: Skeleton, variance: float = DEFAULT_VARIANCE,
+) -> list[np.ndarray]:
+    """Fill long finger ``gaps`` by each of ``estimates`` (names from :data:`ESTIMATES`).
 
     Parameters
     ----------
-    estimate
+    estimates
         ``"chain"`` (:func:`~handdb.gapfill.rigid.carry_along_chains`), ``"regression"``
         (:func:`~handdb.gapfill.regression.regression_fill` on the finger joints, the chain
-        where it cannot) or ``"lowrank"`` (:mod:`handdb.gapfill.lowrank`).
+        where it cannot) and ``"lowrank"`` (:mod:`handdb.gapfill.lowrank`).
     local
         ``(T, J, 2)`` tracks in the palm frame, NaN where missing.
     filled
@@ -71,17 +71,18 @@ def estimate_long_gaps(
 
     Returns
     -------
-    numpy.ndarray
-        ``(T, J, 2)``: ``filled`` with ``gaps`` filled.
+    list of numpy.ndarray
+        ``(T, J, 2)`` each: ``filled`` with ``gaps`` filled by each estimate, in order.
     """
     chain = carry_along_chains(filled, missing, gaps, skeleton)
-    if estimate == "chain":
-        return chain
-    if estimate == "regression":
+    results = {"chain": chain}
+    if "regression" in estimates:
         regressed = regression_fill(filled, missing, gaps, ~palm_joints(skeleton))
-        return np.where(np.isnan(regressed), chain, regressed)
-    model = lowrank_reconstruct(local, missing, variance=variance)
-    return blend_to_edges(filled, model, gaps)
+        results["regression"] = np.where(np.isnan(regressed), chain, regressed)
+    if "lowrank" in estimates:
+        model = lowrank_reconstruct(local, missing, variance=variance)
+        results["lowrank"] = blend_to_edges(filled, model, gaps)
+    return [results[name] for name in estimates]
 
 
 def validation_mask(missing: np.ndarray, gaps: Gaps, seed: int = 0) -> np.ndarray:
@@ -115,23 +116,20 @@ def _long_gap_fill(
     skeleton: Skeleton, rule: str, variance: float,
 ) -> np.ndarray:
     if rule != "validated":
-        return estimate_long_gaps(rule, local, filled, missing, gaps, skeleton, variance)
+        return estimate_long_gaps((rule,), local, filled, missing, gaps, skeleton, variance)[0]
     hidden = validation_mask(missing, gaps)
     trial_missing = missing | hidden
     trial_local = np.where(hidden[..., None], np.nan, local)
     trial_filled = np.where(hidden[..., None], interpolate_gaps(trial_local, trial_missing), filled)
-    trial_gaps = find_gaps(hidden)
-    inverse_errors, estimates = [], []
-    for estimate in VALIDATED_ESTIMATES:
-        trial = estimate_long_gaps(estimate, trial_local, trial_filled, trial_missing,
-                                   trial_gaps, skeleton, variance)
-        error = np.sum(np.where(hidden, np.sum((trial - local) ** 2, axis=-1), 0.0), axis=0)
-        inverse_errors.append(1.0 / np.maximum(error, np.finfo(float).tiny))
-        estimates.append(estimate_long_gaps(estimate, local, filled, missing, gaps, skeleton,
-                                            variance))
-    weights = np.array(inverse_errors) / np.sum(inverse_errors, axis=0)
-    weights = np.where(hidden.any(axis=0), weights, 1.0 / len(estimates))
-    return np.einsum("ej,etjk->tjk", weights, np.array(estimates))
+    trials = estimate_long_gaps(VALIDATED_ESTIMATES, trial_local, trial_filled, trial_missing,
+                                find_gaps(hidden), skeleton, variance)
+    errors = np.array([np.sum(np.where(hidden, np.sum((trial - local) ** 2, axis=-1), 0.0), axis=0)
+                       for trial in trials])
+    inverse = 1.0 / np.maximum(errors, np.finfo(float).tiny)
+    weights = np.where(hidden.any(axis=0), inverse / inverse.sum(axis=0), 1.0 / len(trials))
+    estimates = estimate_long_gaps(VALIDATED_ESTIMATES, local, filled, missing, gaps, skeleton,
+                                   variance)
+    return np.sum(weights[:, None, :, None] * np.array(estimates), axis=0)
 
 
 @register("auto", OFFLINE, "default: rigid palm, PCHIP short gaps, validated chain/low-rank")

@@ -18,7 +18,7 @@ import numpy as np
 
 from handdb.gapfill.rest_pose import rest_pose_2d
 from handdb.gapfill.rigid import MIN_PALM_POINTS, palm_joints
-from handdb.gapfill.transfer import AFFINE, NO_MAP, fit_maps
+from handdb.gapfill.transfer import AFFINE, NO_MAP, apply_linear, fit_maps
 from handdb.skeletons import Skeleton
 
 
@@ -42,10 +42,8 @@ class PalmMotion:
     fitted: np.ndarray
 
 
-def _fit_to(reference: np.ndarray, uv: np.ndarray, palm_seen: np.ndarray):
-    n_frames = uv.shape[0]
-    source = np.broadcast_to(reference, (n_frames, *reference.shape))
-    return fit_maps(source, uv, palm_seen)
+def _repeat(points: np.ndarray, n_frames: int) -> np.ndarray:
+    return np.broadcast_to(points, (n_frames, *points.shape))
 
 
 def _interpolate_in_time(values: np.ndarray, known: np.ndarray) -> np.ndarray:
@@ -78,39 +76,39 @@ def palm_motion(uv: np.ndarray, missing: np.ndarray, skeleton: Skeleton) -> Palm
     palm_seen = ~missing & palm
     if not (palm_seen.sum(axis=1) >= MIN_PALM_POINTS).any():
         return None
-    complete = palm_seen.sum(axis=1) == palm.sum()
-    reference = rest_pose_2d(skeleton)
+    points, seen = uv[:, palm], palm_seen[:, palm]
+    complete = seen.all(axis=1)
+    reference = rest_pose_2d(skeleton)[palm]
     for _ in range(2):
-        linear, offset, kind = _fit_to(reference, uv, palm_seen)
+        linear, offset, kind = fit_maps(_repeat(reference, len(uv)), points, seen)
         fitted = kind == AFFINE
         shaping = complete if complete.any() else fitted
         inverse = np.linalg.inv(np.where(fitted[:, None, None], linear, np.eye(2)))
-        canonical = np.einsum("tij,tkj->tki", inverse, np.nan_to_num(uv) - offset[:, None])
-        canonical = np.where((palm_seen & shaping[:, None])[..., None], canonical, np.nan)
+        canonical = apply_linear(inverse, np.nan_to_num(points) - offset[:, None])
+        canonical = np.where((seen & shaping[:, None])[..., None], canonical, np.nan)
         seen_once = ~np.isnan(canonical[..., 0]).all(axis=0)
         reference = np.where(seen_once[:, None], np.nanmedian(
             np.where(seen_once[None, :, None], canonical, 0.0), axis=0), reference)
-    linear, offset, kind = _fit_to(reference, uv, palm_seen)
+    linear, offset, kind = fit_maps(_repeat(reference, len(uv)), points, seen)
     fitted = kind == AFFINE
     if not fitted.any():
         return None
     linear = _interpolate_in_time(linear, fitted)
     offset = _interpolate_in_time(offset, fitted)
-    predicted = np.einsum("tij,kj->tki", linear, reference) + offset[:, None]
-    correction, shift, kind = fit_maps(predicted, uv, palm_seen & ~fitted[:, None], affine=False)
+    predicted = reference @ np.swapaxes(linear, 1, 2) + offset[:, None]
+    correction, shift, kind = fit_maps(predicted, points, seen & ~fitted[:, None], affine=False)
     corrected = kind > NO_MAP
     linear = np.where(corrected[:, None, None], correction @ linear, linear)
-    offset = np.where(corrected[:, None], np.einsum("tij,tj->ti", correction, offset) + shift,
-                      offset)
+    offset = np.where(corrected[:, None], apply_linear(correction, offset) + shift, offset)
     return PalmMotion(linear=linear, offset=offset, fitted=fitted)
 
 
 def to_palm_frame(uv: np.ndarray, motion: PalmMotion) -> np.ndarray:
     """Express image points in the palm frame, ``(T, J, 2) -> (T, J, 2)``."""
     inverse = np.linalg.inv(motion.linear)
-    return np.einsum("tij,tkj->tki", inverse, uv - motion.offset[:, None])
+    return apply_linear(inverse, uv - motion.offset[:, None])
 
 
 def to_image(points: np.ndarray, motion: PalmMotion) -> np.ndarray:
     """Map palm-frame points back to the image, ``(T, J, 2) -> (T, J, 2)`` pixels."""
-    return np.einsum("tij,tkj->tki", motion.linear, points) + motion.offset[:, None]
+    return apply_linear(motion.linear, points) + motion.offset[:, None]

@@ -40,11 +40,12 @@ def _carry(
     uv: np.ndarray, missing: np.ndarray, reference: np.ndarray, frame: np.ndarray,
     joint: np.ndarray, basis: np.ndarray, affine: bool,
 ) -> np.ndarray:
-    joints = np.arange(uv.shape[1])
-    weights = (basis & ~missing[reference] & ~missing[frame]
-               & (joints[None, :] != joint[:, None]))
+    carriers = np.flatnonzero(basis)
+    weights = (~missing[reference][:, carriers] & ~missing[frame][:, carriers]
+               & (carriers[None, :] != joint[:, None]))
     query = uv[reference, joint]
-    mapped, ok = map_points(uv[reference], uv[frame], weights, query, affine=affine)
+    mapped, ok = map_points(uv[reference][:, carriers], uv[frame][:, carriers], weights, query,
+                            affine=affine)
     return np.where(ok[:, None], mapped, query)
 
 

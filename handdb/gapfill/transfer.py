@@ -21,8 +21,15 @@ MIN_AFFINE_SPREAD = 0.05
 NO_MAP, TRANSLATION, SIMILARITY, AFFINE = 0, 1, 2, 3
 
 
+def apply_linear(linear: np.ndarray, points: np.ndarray) -> np.ndarray:
+    """Apply ``(N, 2, 2)`` linear maps to ``(N, 2)`` or ``(N, K, 2)`` points, one map each."""
+    if points.ndim == 2:
+        return (linear @ points[..., None])[..., 0]
+    return points @ np.swapaxes(linear, 1, 2)
+
+
 def _weighted_mean(points: np.ndarray, weights: np.ndarray, count: np.ndarray) -> np.ndarray:
-    total = np.einsum("nj,njk->nk", weights, np.nan_to_num(points))
+    total = (weights[:, None, :] @ np.nan_to_num(points))[:, 0]
     return total / np.maximum(count, 1)[:, None]
 
 
@@ -69,15 +76,15 @@ def fit_maps(
 
     kind = np.minimum(count, SIMILARITY)
     if affine:
-        src_cov = np.einsum("nki,nkj->nij", src, src)
-        cross = np.einsum("nki,nkj->nij", dst, src)
+        src_cov = np.swapaxes(src, 1, 2) @ src
+        cross = np.swapaxes(dst, 1, 2) @ src
         eig = np.linalg.eigvalsh(src_cov)
         spread_ok = (count >= 3) & (eig[:, 0] > MIN_AFFINE_SPREAD * np.maximum(eig[:, 1], 1e-300))
         safe_cov = np.where(spread_ok[:, None, None], src_cov, np.eye(2))
         linear = np.where(spread_ok[:, None, None], cross @ np.linalg.inv(safe_cov), linear)
         kind = np.where(spread_ok, AFFINE, kind)
 
-    offset = dst_mean - np.einsum("nij,nj->ni", linear, src_mean)
+    offset = dst_mean - apply_linear(linear, src_mean)
     return linear, np.where((count >= 1)[:, None], offset, np.nan), kind
 
 
@@ -107,4 +114,4 @@ def map_points(
         ``(N,) bool``: a map could be fitted.
     """
     linear, offset, kind = fit_maps(source, target, weights, affine=affine)
-    return np.einsum("nij,nj->ni", linear, query) + offset, kind > NO_MAP
+    return apply_linear(linear, query) + offset, kind > NO_MAP
