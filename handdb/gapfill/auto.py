@@ -8,11 +8,12 @@
 3. Finger points in interior gaps of at most ``short_gap`` frames: PCHIP interpolation.
 4. Finger points in longer, leading or trailing gaps: two estimates from the other joints,
    the point carried with its parent bone (:func:`~handdb.gapfill.rigid.carry_along_chains`,
-   the joint's angle changing linearly across the gap) and the low-rank reconstruction
-   (:mod:`handdb.gapfill.lowrank`), are weighed per joint by how well each refills runs of
-   that joint's own observed frames hidden on purpose (:func:`validation_mask`): each gets
-   the other's share of the squared validation error. ``long_gaps`` picks ``"chain"``,
-   ``"lowrank"`` or their plain mean (``"ensemble"``) instead.
+   the joint's angle changing linearly across the gap) and a ridge regression on the finger
+   joints seen throughout the gap (:mod:`handdb.gapfill.regression`), are weighed per joint
+   by how well each refills runs of that joint's own observed frames hidden on purpose
+   (:func:`validation_mask`): weights inversely proportional to the squared validation
+   error. ``long_gaps`` picks one estimate instead (``"chain"``, ``"regression"``, or
+   ``"lowrank"``, the iterated PCA of :mod:`handdb.gapfill.lowrank`).
 5. Joints never observed are placed first, by the rest pose fitted to the observed joints
    of each frame, so that the other joints can lean on them.
 6. Kinematic refinement (:mod:`handdb.gapfill.refine`): filled points are pulled back
@@ -132,7 +133,7 @@ def _long_gap_fill(
     return np.sum(weights[:, None, :, None] * np.array(estimates), axis=0)
 
 
-@register("auto", OFFLINE, "default: rigid palm, PCHIP short gaps, validated chain/low-rank")
+@register("auto", OFFLINE, "default: rigid palm, PCHIP short gaps, validated chain/regression")
 def fill_auto(
     uv: np.ndarray,
     missing: np.ndarray,

@@ -2,9 +2,11 @@ import numpy as np
 import pytest
 
 from handdb.gapfill import METHODS, UNFILLED, fill_gaps
+from handdb.gapfill.gaps import find_gaps
 from handdb.gapfill.interpolate import interpolate_gaps
 from handdb.gapfill.lowrank import lowrank_reconstruct
 from handdb.gapfill.refine import refine_bone_lengths
+from handdb.gapfill.regression import regression_fill
 from handdb.gapfill.rigid import palm_joints
 
 
@@ -120,3 +122,18 @@ def test_refinement_pulls_a_filled_point_back_onto_its_bone(mediapipe):
     bounded = refine_bone_lengths(uv, missing, mediapipe, bone_lengths={"index_tip": 4.0},
                                   scale=2.5)
     assert np.isclose(np.linalg.norm(bounded[2, tip] - bounded[2, dip]), 10.0)
+
+
+def test_regression_recovers_a_joint_that_follows_the_others():
+    rng = np.random.default_rng(2)
+    t = np.arange(200) / 30
+    drivers = np.stack([np.sin(1.7 * t), np.cos(2.9 * t)], axis=1) @ rng.normal(size=(2, 8))
+    uv = drivers.reshape(200, 4, 2) * 30
+    uv = np.concatenate([uv, (uv[:, :2] @ [[0.5, -0.2], [0.3, 0.8]]).sum(1, keepdims=True)], 1)
+    missing = np.zeros((200, 5), dtype=bool)
+    missing[60:120, 4] = True
+    gaps = find_gaps(missing)
+    filled = regression_fill(np.where(missing[..., None], np.nan, uv), missing, gaps,
+                             np.ones(5, dtype=bool))
+    assert np.abs(filled[60:120, 4] - uv[60:120, 4]).max() < 0.05 * np.ptp(uv[:, 4])
+    assert np.array_equal(filled[~missing], uv[~missing])
