@@ -21,12 +21,27 @@ from handdb.skeletons import Skeleton
 KINDS = ("linear", "cubic", "pchip")
 
 
+def _pchip_knots(frames: np.ndarray, at: np.ndarray) -> np.ndarray:
+    """Return the samples a PCHIP through ``frames`` needs to be evaluated at ``at``.
+
+    PCHIP is local: its slope at a sample depends only on the next sample either side, so
+    within a gap it depends on the two samples bounding the gap and their outer neighbours.
+    Building it on those samples alone (and the clip's first and last) gives the same
+    values in every gap at a fraction of the cost on long clips.
+    """
+    after = np.searchsorted(frames, at)
+    near = np.concatenate([after - 2, after - 1, after, after + 1, [0, frames.size - 1]])
+    return np.unique(np.clip(near, 0, frames.size - 1))
+
+
 def _curve(frames: np.ndarray, values: np.ndarray, kind: str, at: np.ndarray) -> np.ndarray:
     at = np.clip(at, frames[0], frames[-1])
     if kind == "linear" or frames.size < 3:
         return np.stack([np.interp(at, frames, values[:, k]) for k in range(2)], axis=-1)
-    curve = CubicSpline(frames, values) if kind == "cubic" else PchipInterpolator(frames, values)
-    return curve(at)
+    if kind == "cubic":
+        return CubicSpline(frames, values)(at)
+    knots = _pchip_knots(frames, at)
+    return PchipInterpolator(frames[knots], values[knots])(at)
 
 
 def interpolate_gaps(

@@ -1,5 +1,6 @@
 import numpy as np
 import pytest
+from scipy.interpolate import PchipInterpolator
 
 from handdb.gapfill import METHODS, UNFILLED, fill_gaps
 from handdb.gapfill.gaps import find_gaps
@@ -137,3 +138,18 @@ def test_regression_recovers_a_joint_that_follows_the_others():
                              np.ones(5, dtype=bool))
     assert np.abs(filled[60:120, 4] - uv[60:120, 4]).max() < 0.05 * np.ptp(uv[:, 4])
     assert np.array_equal(filled[~missing], uv[~missing])
+
+
+def test_pchip_on_the_gaps_neighbourhood_equals_scipy_on_every_sample():
+    rng = np.random.default_rng(0)
+    uv = np.cumsum(rng.normal(size=(500, 3, 2)), axis=0)
+    missing = rng.random((500, 3)) < 0.1
+    missing[:4, 1] = True
+    missing[-7:, 2] = True
+    filled = interpolate_gaps(np.where(missing[..., None], np.nan, uv), missing, "pchip")
+    frames = np.arange(500)
+    for j in range(3):
+        known = ~missing[:, j]
+        at = np.clip(frames[~known], frames[known][0], frames[known][-1])
+        expected = PchipInterpolator(frames[known], uv[known, j])(at)
+        assert np.allclose(filled[~known, j], expected, rtol=0, atol=1e-12)
