@@ -1,0 +1,504 @@
+"""How fast handdb builds a database, measured against the I/O floor (issue 8).
+
+For synthetic inboxes of several sizes this prints, and saves as JSON in ``benchmarks/out/``:
+
+- frames per second of every pipeline stage (ingest, bone lengths, gap fill, lift,
+  validate, export, commit), timed by calling ``handdb.pipeline`` directly on the clips;
+- the whole build (the Prefect flow, in a fresh process) against the I/O floor: pyarrow
+  reading the same input CSVs and writing their rows as Parquet, nothing else; the fixed
+  start-up cost (an empty build) is measured apart and subtracted;
+- peak memory (``ru_maxrss``) of every build;
+- how build time grows with clips and with frames (exponent of a log-log fit);
+- Prefect's cost per task, from a flow of empty tasks shaped like the build;
+- DuckDB query latencies on a database of ten million ``joints_3d`` rows.
+
+Run: ``.venv/bin/python benchmarks/run.py [--plan quick|default|large]`` (``make bench``).
+Figures by wall time are noisy on a shared machine; CPU seconds are printed beside them.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import platform
+import resource
+import shutil
+import subprocess
+import sys
+import tempfile
+import time
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
+from dataclasses import asdict, dataclass
+from importlib import metadata
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pyarrow as pa
+import pyarrow.csv as pa_csv
+import pyarrow.parquet as pq
+from threadpoolctl import threadpool_limits
+
+REPO = Path(__file__).resolve().parents[1]
+OUT_DIR = REPO / "benchmarks" / "out"
+PREFECT_HOME = OUT_DIR / "prefect-home"
+
+#: Distinct synthetic clips per inbox; larger inboxes repeat them under other clip ids.
+POOL_SIZE = 8
+MOTIONS = ("rapid", "wave", "clench", "random")
+#: Runs of hidden points per 1000 frames, so gap filling has work.
+GAPS_PER_1000_FRAMES = 40
+STAGES = ("ingest", "bone lengths", "gap fill", "lift", "validate", "export", "commit")
+#: Rows of the synthetic ``joints_3d`` the queries run on.
+QUERY_ROWS = 10_000_000
+QUERY_CLIPS = 100
+QUERY_REPEATS = 5
+QUERIES = {
+    "aggregate over joints_3d": (
+        "SELECT lift_method, count(*) AS n, avg(z) AS mean_z, avg(scale) AS mean_scale "
+        "FROM joints_3d GROUP BY lift_method"),
+    "per-joint error": (
+        "SELECT j.joint, avg(abs(j.z - t.z)) AS mean_abs_dz FROM joints_3d j "
+        "JOIN truth_3d t USING (clip_id, frame, joint_index) GROUP BY j.joint ORDER BY j.joint"),
+    "one clip's frames": "SELECT * FROM joints_3d WHERE clip_id = 'q-0042' ORDER BY frame",
+}
+PREFECT_OVERHEAD_CLIPS = 100
+
+
+@dataclass(frozen=True)
+class Plan:
+    """The inbox sizes a benchmark run builds: ``(n_clips, n_frames)`` pairs."""
+
+    by_clips: tuple[tuple[int, int], ...]
+    by_frames: tuple[tuple[int, int], ...]
+    stage_clips: tuple[int, int]
+    query_rows: int
+
+
+DEFAULT = Plan(by_clips=((10, 300), (30, 300), (100, 300)),
+               by_frames=((4, 1000), (4, 5000), (4, 20_000)),
+               stage_clips=(8, 5000), query_rows=QUERY_ROWS)
+QUICK = Plan(by_clips=((4, 300), (16, 300)), by_frames=((2, 1000), (2, 4000)),
+             stage_clips=(4, 1000), query_rows=1_000_000)
+LARGE = Plan(by_clips=((10, 300), (100, 300), (1000, 300)),
+             by_frames=((10, 1000), (10, 5000), (10, 20_000)),
+             stage_clips=(8, 20_000), query_rows=QUERY_ROWS)
+PLANS = {"quick": QUICK, "default": DEFAULT, "large": LARGE}
+
+
+# -- synthetic inboxes -------------------------------------------------------------------
+
+
+def write_inbox(inbox: Path, n_clips: int, n_frames: int) -> int:
+    """Write ``n_clips`` synthetic clips of ``n_frames`` (canonical CSV, truth, sidecar).
+
+    ``POOL_SIZE`` distinct clips are synthesised (motions and seeds vary) and repeated
+    under further clip ids. Returns the total number of frames.
+    """
+    from handdb.demo import hide_points
+    from handdb.readers import get_format
+    from handdb.skeletons import load_skeleton
+    from handdb.synthetic import synthesize_clip
+
+    inbox.mkdir(parents=True, exist_ok=True)
+    tracks, truth = get_format("tracks_csv"), get_format("truth_csv")
+    n_gaps = GAPS_PER_1000_FRAMES * n_frames // 1000
+    for i in range(n_clips):
+        clip_id = f"c{i:04d}"
+        pool_id = f"c{i % POOL_SIZE:04d}"
+        if i >= POOL_SIZE:
+            for suffix in (".clip.json", tracks.suffix, ".truth.csv"):
+                shutil.copyfile(inbox / f"{pool_id}{suffix}", inbox / f"{clip_id}{suffix}")
+            continue
+        clip = synthesize_clip(MOTIONS[i % len(MOTIONS)], n_frames, seed=i)
+        skeleton = load_skeleton(clip.skeleton)
+        rng = np.random.default_rng(i)
+        uv = hide_points(clip.uv, n_gaps, rng)
+        confidence = np.clip(rng.normal(0.9, 0.05, uv.shape[:2]), 0.0, 1.0)
+        (inbox / f"{clip_id}.clip.json").write_text(json.dumps(clip.sidecar(subject=f"s{i}")))
+        tracks.write(inbox / f"{clip_id}{tracks.suffix}", uv, confidence, skeleton)
+        truth.write(inbox / f"{clip_id}.truth.csv", clip.xyz, skeleton)
+    return n_clips * n_frames
+
+
+# -- timing helpers ----------------------------------------------------------------------
+
+
+@dataclass
+class Timing:
+    """Wall and CPU seconds of some work on ``frames`` frames."""
+
+    wall: float = 0.0
+    cpu: float = 0.0
+    frames: int = 0
+
+    @property
+    def frames_per_second(self) -> float:
+        """Frames per wall second."""
+        return self.frames / self.wall if self.wall else float("nan")
+
+    @property
+    def frames_per_cpu_second(self) -> float:
+        """Frames per CPU second (steadier than wall time on a shared machine)."""
+        return self.frames / self.cpu if self.cpu else float("nan")
+
+
+@contextmanager
+def timed(timing: Timing, frames: int) -> Iterator[None]:
+    """Add the wall and CPU time of the ``with`` block, and ``frames``, to ``timing``."""
+    wall, cpu = time.perf_counter(), time.process_time()
+    yield
+    timing.wall += time.perf_counter() - wall
+    timing.cpu += time.process_time() - cpu
+    timing.frames += frames
+
+
+def fitted_exponent(sizes: list[float], seconds: list[float]) -> float:
+    """Slope of log(seconds) against log(size): 1 is linear growth."""
+    return float(np.polyfit(np.log(sizes), np.log(seconds), 1)[0])
+
+
+def load_average() -> float:
+    """One-minute load average of the machine (other engineers share it)."""
+    return os.getloadavg()[0]
+
+
+# -- per-stage throughput ----------------------------------------------------------------
+
+
+def stage_timings(inbox: Path, db: Path) -> dict[str, Timing]:
+    """Time every pipeline stage on every clip of ``inbox``, calling the library directly.
+
+    BLAS runs on one thread, as in a build (clips, not matrices, are what runs in parallel).
+    """
+    from handdb import pipeline
+    from handdb.readers import discover
+    from handdb.store import Store
+
+    store = Store(str(db))
+    ratios, _ = pipeline.ingest_xray([], store)
+    timings = {stage: Timing() for stage in STAGES}
+    with threadpool_limits(limits=1, user_api="blas"):
+        for entry in discover(inbox).clips:
+            time_clip_stages(entry, inbox, store, ratios, timings)
+    return timings
+
+
+def time_clip_stages(entry: Any, inbox: Path, store: Any, ratios: pa.Table,
+                     timings: dict[str, Timing]) -> None:
+    """Run one clip through every stage, adding each stage's time to ``timings``."""
+    from handdb import pipeline
+    from handdb.quarantine import Refusal
+
+    options = pipeline.BuildOptions()
+    with timed(timings["ingest"], 0):
+        result = pipeline.ingest(entry, "bench")
+    n_frames = result.clip.n_frames
+    timings["ingest"].frames += n_frames
+    steps: dict[str, Callable] = {
+        "bone lengths": lambda r: pipeline.resolve_bone_lengths(r, ratios),
+        "gap fill": lambda r: pipeline.fill(r, options),
+        "lift": lambda r: pipeline.lift_clip(r, options),
+        "validate": pipeline.validate,
+        "export": lambda r: pipeline.export(r, store, options),
+        "commit": lambda r: store.commit_clip(r.clip.clip_id, pipeline.clip_tables(r, inbox)),
+    }
+    for stage, step in steps.items():
+        with timed(timings[stage], n_frames):
+            outcome = step(result)
+        if isinstance(outcome, Refusal):
+            raise RuntimeError(f"benchmark clip {entry.clip_id} refused at {stage}: {outcome}")
+        result = outcome or result
+
+
+# -- the I/O floor -----------------------------------------------------------------------
+
+
+def io_floor(inbox: Path, out: Path) -> Timing:
+    """pyarrow reads every input CSV and writes its rows as Parquet (zstd), nothing else."""
+    out.mkdir(parents=True, exist_ok=True)
+    timing = Timing()
+    with timed(timing, 0):
+        for path in sorted(inbox.glob("*.csv")):
+            table = pa_csv.read_csv(path)
+            pq.write_table(table, out / f"{path.name}.parquet", compression="zstd")
+    return timing
+
+
+# -- whole builds in a fresh process -----------------------------------------------------
+
+
+def child_build(inbox: str, db: str) -> None:
+    """Run the build flow (quick flows) and print its figures as JSON (the child side)."""
+    start = time.perf_counter()
+    from flows.build import run
+    from flows.settings import quick_flows
+
+    imported = time.perf_counter()
+    with quick_flows():
+        summary = run(inbox, db, export_usd=True)
+    finished = time.perf_counter()
+    usage = resource.getrusage(resource.RUSAGE_SELF)
+    print(json.dumps({
+        "import_seconds": imported - start,
+        "flow_seconds": finished - imported,
+        "process_seconds": finished - start,
+        "cpu_seconds": usage.ru_utime + usage.ru_stime,
+        "maxrss_mb": usage.ru_maxrss / 1024,
+        "processed": len(summary.processed),
+        "failed": len(summary.failed),
+        "refused": len(summary.refusals),
+    }))
+
+
+def build(inbox: Path, db: Path) -> dict:
+    """Build ``db`` from ``inbox`` in a fresh Python process; its figures and wall time."""
+    env = os.environ | {"PREFECT_HOME": str(PREFECT_HOME)}
+    start = time.perf_counter()
+    done = subprocess.run([sys.executable, __file__, "--child-build", str(inbox), str(db)],
+                          capture_output=True, text=True, env=env, cwd=REPO, check=False)
+    wall = time.perf_counter() - start
+    if done.returncode:
+        raise RuntimeError(f"build of {inbox} failed:\n{done.stderr[-3000:]}")
+    figures = json.loads(done.stdout.strip().splitlines()[-1])
+    if figures["failed"] or figures["refused"]:
+        raise RuntimeError(f"build of {inbox}: {figures}")
+    return figures | {"wall_seconds": wall, "load": load_average()}
+
+
+# -- Prefect's per-task cost -------------------------------------------------------------
+
+
+def child_prefect_overhead(n_clips: int) -> None:
+    """Print the seconds of a flow of empty tasks shaped like the build (the child side)."""
+    from prefect import flow, task
+    from prefect.cache_policies import NO_CACHE
+    from prefect.task_runners import ThreadPoolTaskRunner
+
+    from flows.build import DEFAULT_WORKERS, WINDOW_PER_WORKER
+    from flows.settings import quick_flows
+
+    @task(cache_policy=NO_CACHE)
+    def stage(previous: int) -> int:
+        return previous + 1
+
+    @flow(task_runner=ThreadPoolTaskRunner(max_workers=DEFAULT_WORKERS))
+    def chains(n: int) -> None:
+        window = DEFAULT_WORKERS * WINDOW_PER_WORKER
+        for begin in range(0, n, window):
+            futures = []
+            for _ in range(begin, min(n, begin + window)):
+                future = stage.submit(0)
+                for _ in STAGES[1:]:
+                    future = stage.submit(future)
+                futures.append(future)
+            for future in futures:
+                future.wait()
+
+    with quick_flows():
+        chains(1)
+        start = time.perf_counter()
+        chains(n_clips)
+        seconds = time.perf_counter() - start
+    print(json.dumps({"seconds": seconds, "tasks": n_clips * len(STAGES)}))
+
+
+def prefect_overhead(n_clips: int) -> dict:
+    """Seconds per task of Prefect alone, from :func:`child_prefect_overhead`."""
+    env = os.environ | {"PREFECT_HOME": str(PREFECT_HOME)}
+    done = subprocess.run([sys.executable, __file__, "--child-overhead", str(n_clips)],
+                          capture_output=True, text=True, env=env, cwd=REPO, check=True)
+    figures = json.loads(done.stdout.strip().splitlines()[-1])
+    return figures | {"per_task_ms": 1000 * figures["seconds"] / figures["tasks"],
+                      "per_clip_ms": 1000 * figures["seconds"] / n_clips}
+
+
+# -- queries -----------------------------------------------------------------------------
+
+
+def write_query_database(db: Path, n_rows: int) -> int:
+    """Write ``joints_3d`` and ``truth_3d`` of ``QUERY_CLIPS`` clips with synthetic values."""
+    from handdb import tables
+    from handdb.skeletons import load_skeleton
+    from handdb.store import Store
+
+    store, skeleton = Store(str(db)), load_skeleton("mediapipe21")
+    n_joints = skeleton.n_joints
+    n_frames = n_rows // (QUERY_CLIPS * n_joints)
+    rng = np.random.default_rng(0)
+    frame = np.repeat(np.arange(n_frames, dtype=np.int32), n_joints)
+    joint_index = np.tile(np.arange(n_joints, dtype=np.int32), n_frames)
+    joint = pa.DictionaryArray.from_arrays(joint_index, skeleton.joints).cast(pa.string())
+    n = frame.size
+    for i in range(QUERY_CLIPS):
+        clip_id = f"q-{i:04d}"
+        xyz = rng.normal(0.0, 50.0, (n, 3))
+        store.write("joints_3d", clip_id, tables.from_columns("joints_3d", {
+            "clip_id": clip_id, "frame": frame, "joint": joint, "joint_index": joint_index,
+            "u": xyz[:, 0] + 320, "v": xyz[:, 1] + 240, "observed": np.ones(n, bool),
+            "confidence": np.full(n, 0.9), "filled": np.zeros(n, bool),
+            "fill_method": pa.nulls(n, pa.string()), "x": xyz[:, 0], "y": xyz[:, 1],
+            "z": xyz[:, 2], "lift_method": "default", "scale": np.ones(n),
+            "sign_confidence": np.ones(n), "length_inconsistency": np.zeros(n),
+        }))
+        store.write("truth_3d", clip_id, tables.from_columns("truth_3d", {
+            "clip_id": clip_id, "frame": frame, "joint": joint, "joint_index": joint_index,
+            "x": xyz[:, 0], "y": xyz[:, 1], "z": xyz[:, 2] + rng.normal(0.0, 5.0, n),
+        }))
+    return QUERY_CLIPS * n
+
+
+def query_latencies(db: Path) -> dict[str, float]:
+    """Best of ``QUERY_REPEATS`` wall seconds of each query in :data:`QUERIES`."""
+    from handdb.query import connect
+
+    con = connect(str(db))
+    latencies = {}
+    for name, sql in QUERIES.items():
+        best = float("inf")
+        for _ in range(QUERY_REPEATS):
+            start = time.perf_counter()
+            con.execute(sql).to_arrow_table()
+            best = min(best, time.perf_counter() - start)
+        latencies[name] = best
+    return latencies
+
+
+# -- the run -----------------------------------------------------------------------------
+
+
+def machine() -> dict:
+    """What the figures were measured on."""
+    cpu = next((line.split(":", 1)[1].strip() for line in
+                Path("/proc/cpuinfo").read_text().splitlines() if line.startswith("model name")),
+               platform.processor())
+    mem_kb = next(int(line.split()[1]) for line in Path("/proc/meminfo").read_text().splitlines()
+                  if line.startswith("MemTotal"))
+    packages = ("numpy", "scipy", "pyarrow", "duckdb", "prefect", "usd-core", "matplotlib")
+    return {"cpus": os.cpu_count(), "cpu_model": cpu, "memory_gb": round(mem_kb / 2**20, 1),
+            "python": platform.python_version(),
+            "packages": {name: metadata.version(name) for name in packages},
+            "load_at_start": load_average()}
+
+
+def print_stage_table(timings: dict[str, Timing]) -> None:
+    total = Timing(sum(t.wall for t in timings.values()), sum(t.cpu for t in timings.values()),
+                   next(iter(timings.values())).frames)
+    print(f"{'stage':<14}{'frames':>9}{'wall s':>9}{'cpu s':>9}{'frames/s':>12}"
+          f"{'frames/cpu s':>14}")
+    for stage, timing in [*timings.items(), ("all stages", total)]:
+        print(f"{stage:<14}{timing.frames:>9}{timing.wall:>9.2f}{timing.cpu:>9.2f}"
+              f"{timing.frames_per_second:>12,.0f}{timing.frames_per_cpu_second:>14,.0f}")
+
+
+def run_builds(sizes: tuple[tuple[int, int], ...], scratch: Path, startup: float) -> list[dict]:
+    """Build an inbox of every size; time it against the I/O floor."""
+    rows = []
+    for n_clips, n_frames in sizes:
+        inbox, db = scratch / f"inbox-{n_clips}x{n_frames}", scratch / f"db-{n_clips}x{n_frames}"
+        frames = write_inbox(inbox, n_clips, n_frames)
+        floor = io_floor(inbox, scratch / f"floor-{n_clips}x{n_frames}")
+        figures = build(inbox, db)
+        beyond = figures["process_seconds"] - startup
+        rows.append(figures | {"n_clips": n_clips, "n_frames": n_frames, "frames": frames,
+                               "floor_seconds": floor.wall, "beyond_startup": beyond,
+                               "floor_ratio": beyond / floor.wall,
+                               "build_frames_per_second": frames / beyond})
+        shutil.rmtree(db)
+        print(f"{n_clips:>6}{n_frames:>8}{frames:>10}{figures['process_seconds']:>9.1f}"
+              f"{figures['cpu_seconds']:>8.1f}{beyond:>9.1f}{floor.wall:>8.2f}"
+              f"{beyond / floor.wall:>8.1f}"
+              f"{frames / beyond:>10,.0f}{figures['maxrss_mb']:>9.0f}{figures['load']:>6.1f}",
+              flush=True)
+    return rows
+
+
+def main(plan: Plan, out: Path) -> dict:
+    results: dict = {"machine": machine(), "plan": asdict(plan)}
+    print(f"{results['machine']['cpu_model']}, {results['machine']['cpus']} CPUs, "
+          f"load {results['machine']['load_at_start']:.1f}")
+    PREFECT_HOME.mkdir(parents=True, exist_ok=True)
+    with tempfile.TemporaryDirectory(prefix="handdb-bench-") as folder:
+        scratch = Path(folder)
+        empty = scratch / "empty-inbox"
+        empty.mkdir()
+        build(empty, scratch / "warm-up-db")
+        startups = [build(empty, scratch / f"empty-db-{i}") for i in range(3)]
+        startup = min(s["process_seconds"] for s in startups)
+        results["startup"] = {"process_seconds": startup,
+                              "import_seconds": min(s["import_seconds"] for s in startups),
+                              "flow_seconds": min(s["flow_seconds"] for s in startups),
+                              "maxrss_mb": min(s["maxrss_mb"] for s in startups)}
+        print(f"start-up (empty build in a fresh process): {startup:.1f} s "
+              f"(imports {results['startup']['import_seconds']:.1f} s), "
+              f"{results['startup']['maxrss_mb']:.0f} MB")
+
+        n_clips, n_frames = plan.stage_clips
+        stage_inbox = scratch / "stage-inbox"
+        write_inbox(stage_inbox, n_clips, n_frames)
+        timings = stage_timings(stage_inbox, scratch / "stage-db")
+        results["stages"] = {"n_clips": n_clips, "n_frames": n_frames,
+                             **{s: asdict(t) | {"frames_per_second": t.frames_per_second,
+                                                  "frames_per_cpu_second": t.frames_per_cpu_second}
+                                for s, t in timings.items()}}
+        print(f"\nstages, called directly on {n_clips} clips of {n_frames} frames "
+              f"(load {load_average():.1f}):")
+        print_stage_table(timings)
+
+        print(f"\nwhole builds in a fresh process; 'beyond' is the build's time less start-up\n"
+              f"{'clips':>6}{'frames':>8}{'total':>10}{'build s':>9}{'cpu s':>8}{'beyond':>9}"
+              f"{'floor':>8}{'ratio':>8}{'frames/s':>10}{'RSS MB':>9}{'load':>6}")
+        results["by_clips"] = run_builds(plan.by_clips, scratch, startup)
+        results["by_frames"] = run_builds(plan.by_frames, scratch, startup)
+        results["growth"] = {
+            "clips_exponent": fitted_exponent([r["n_clips"] for r in results["by_clips"]],
+                                              [r["beyond_startup"] for r in results["by_clips"]]),
+            "frames_exponent": fitted_exponent(
+                [r["n_frames"] for r in results["by_frames"]],
+                [r["beyond_startup"] for r in results["by_frames"]]),
+        }
+        print(f"growth: time ~ clips^{results['growth']['clips_exponent']:.2f}, "
+              f"time ~ frames^{results['growth']['frames_exponent']:.2f}")
+
+        overhead = prefect_overhead(PREFECT_OVERHEAD_CLIPS)
+        results["prefect_overhead"] = overhead
+        print(f"Prefect alone: {overhead['per_task_ms']:.1f} ms per task, "
+              f"{overhead['per_clip_ms']:.0f} ms per clip of {len(STAGES)} tasks")
+
+        query_db = scratch / "query-db"
+        n_rows = write_query_database(query_db, plan.query_rows)
+        latencies = query_latencies(query_db)
+        results["queries"] = {"joints_3d_rows": n_rows, "seconds": latencies}
+        print(f"\nDuckDB on {n_rows:,} joints_3d rows (best of {QUERY_REPEATS}):")
+        for name, seconds in latencies.items():
+            print(f"  {name:<26}{1000 * seconds:>9.0f} ms")
+    results["load_at_end"] = load_average()
+    out.parent.mkdir(parents=True, exist_ok=True)
+    out.write_text(json.dumps(results, indent=1))
+    print(f"\nfigures: {out}")
+    return results
+
+
+def parse_args() -> argparse.Namespace:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--plan", choices=PLANS, default="default",
+                        help="inbox sizes: quick (minutes), default (10-15 min on 2 busy cores), "
+                             "large (1000 clips; an hour or more)")
+    parser.add_argument("--quick", action="store_const", const="quick", dest="plan",
+                        help="same as --plan quick")
+    parser.add_argument("--out", type=Path, help="JSON file of the figures")
+    parser.add_argument("--child-build", nargs=2, metavar=("INBOX", "DB"), help=argparse.SUPPRESS)
+    parser.add_argument("--child-overhead", type=int, metavar="CLIPS", help=argparse.SUPPRESS)
+    return parser.parse_args()
+
+
+if __name__ == "__main__":
+    args = parse_args()
+    if args.child_build:
+        child_build(*args.child_build)
+    elif args.child_overhead:
+        child_prefect_overhead(args.child_overhead)
+    else:
+        main(PLANS[args.plan], args.out or OUT_DIR / f"bench-{args.plan}.json")
