@@ -34,9 +34,12 @@ def frames_per_second(uv, skeleton, lengths, camera, method) -> float:
     return len(uv) / best
 
 
-def main() -> None:
-    print(f"load average {os.getloadavg()[0]:.1f} on {os.cpu_count()} cores")
-    print(f"{'camera':13s} {'method':15s} " + " ".join(f"{n:>10d}" for n in LENGTHS))
+def throughput_table(clip_lengths: tuple[int, ...] = LENGTHS) -> list[str]:
+    """Frames per second of every method and camera, as lines of a markdown table."""
+    lines = [f"Load average {os.getloadavg()[0]:.1f} on {os.cpu_count()} cores; frames per "
+             "second, best of 3, by clip length:", "",
+             "| camera | method | " + " | ".join(f"{n} frames" for n in clip_lengths) + " |",
+             "|---|---|" + "---:|" * len(clip_lengths)]
     for camera_model in ("orthographic", "pinhole"):
         clip = synthesize_clip("rapid", 400, camera=camera_model, seed=0)
         skeleton = load_skeleton(clip.skeleton)
@@ -44,14 +47,19 @@ def main() -> None:
         camera = Camera(**clip.camera) if camera_model == "pinhole" else Camera()
         for method in available_methods():
             rates = []
-            for n_frames in LENGTHS:
+            for n_frames in clip_lengths:
                 if camera_model == "pinhole" and method == "kinematic" and n_frames > 10_000:
                     rates.append(float("nan"))
                     continue
                 uv = np.tile(clip.uv, (n_frames // len(clip.uv), 1, 1))
                 rates.append(frames_per_second(uv, skeleton, lengths, camera, method))
-            print(f"{camera_model:13s} {method:15s} " + " ".join(f"{r:10.0f}" for r in rates))
-    print("frames per second (columns: clip length in frames)")
+            lines.append(f"| {camera_model} | {method} | "
+                         + " | ".join(f"{r:,.0f}" for r in rates) + " |")
+    return lines
+
+
+def main() -> None:
+    print("\n".join(throughput_table()))
 
 
 if __name__ == "__main__":
