@@ -70,7 +70,8 @@ def compare(clip_id: str, uv, truth, skeleton, lengths, camera, hand, units) -> 
 
 def table_rows(title: str, summary: dict, units: str) -> list[str]:
     lines = [f"**{title}**", "",
-             f"| method | mean abs dZ ({units}) | sign accuracy | MPJPE ({units}) | mirror flagged |",
+             f"| method | mean abs dZ ({units}) | sign accuracy | MPJPE ({units}) "
+             "| mirror flagged |",
              "|---|---:|---:|---:|---|"]
     for method, f in sorted(summary.items(), key=lambda kv: kv[1]["dz_mean"]):
         flag = {True: "yes", False: "no"}.get(f.get("mirror_ambiguous"), "")

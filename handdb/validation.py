@@ -103,6 +103,8 @@ def validation_table(clip_id: str, truth: np.ndarray,
         ``(T, J, 3) float64``, ``units``, camera frame.
     estimates
         Method name -> its :class:`LiftResult` (or ``(T, J, 3)`` positions).
+    skeleton
+        Orders the joint axis of ``truth`` and the estimates.
     units
         Length unit of the clip (a key of :data:`handdb.clip.METERS_PER_UNIT`).
 
@@ -156,7 +158,7 @@ def clip_summary(table: pa.Table) -> dict[str, dict[str, float]]:
 
 
 def markdown_summary(clip_id: str, table: pa.Table) -> str:
-    """A markdown comparison of the methods on one clip (whole clip, then per joint)."""
+    """Compare the methods on one clip in markdown (whole clip, then per joint)."""
     units = table.column("units")[0].as_py() if table.num_rows else ""
     summary = clip_summary(table)
     lines = [f"## Depth validation: {clip_id}", "",
@@ -180,7 +182,7 @@ def markdown_summary(clip_id: str, table: pa.Table) -> str:
 
 
 def comparison_chart(clip_id: str, table: pa.Table, skeleton: Skeleton) -> bytes:
-    """A PNG bar chart of mean ``|ΔZ|`` per joint and method for one clip."""
+    """Draw a PNG bar chart of mean ``|ΔZ|`` per joint and method for one clip."""
     rows = table.to_pylist()
     methods = list(dict.fromkeys(r["method"] for r in rows))
     values = {(r["method"], r["joint"]): r["dz_mean"] for r in rows}

@@ -39,7 +39,7 @@ def projected_lengths(uv: np.ndarray, skeleton: Skeleton) -> np.ndarray:
 
 
 def eq6_scale(projected: np.ndarray, bone_lengths: np.ndarray, rank: int = 1) -> np.ndarray:
-    """The thesis's scale (eq. 6): the smallest ``s`` giving every bone a real depth.
+    """Return the thesis's scale (eq. 6): the smallest ``s`` giving every bone a real depth.
 
     ``s >= p / l`` for every bone, so the smallest admissible scale of a frame is the
     largest ratio of projected length to bone length. (The thesis's appendix program takes

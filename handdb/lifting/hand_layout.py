@@ -55,7 +55,7 @@ def _on_palm(skeleton: Skeleton, joint: int) -> bool:
 
 
 def hand_layout(skeleton: Skeleton) -> HandLayout:
-    """The palm and finger chains of ``skeleton``.
+    """Find the palm and finger chains of ``skeleton``.
 
     Raises
     ------

@@ -139,6 +139,8 @@ def palm_signs(xy: np.ndarray, abs_dz: np.ndarray, skeleton: Skeleton,
         ``(T, J, 2) float64``, clip units, image-plane positions.
     abs_dz
         ``(T, J) float64``, clip units, unsigned bone depths.
+    skeleton, layout
+        The clip's skeleton, its palm and fingers.
 
     Returns
     -------

@@ -50,7 +50,7 @@ def camera_rays(uv: np.ndarray, camera: Camera) -> np.ndarray:
 
 def ray_roots(origin: np.ndarray, ray: np.ndarray,
               length: np.ndarray | float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """The two points of a ray at a given distance from a point.
+    """Find the two points of a ray at a given distance from a point.
 
     Parameters
     ----------

@@ -19,7 +19,8 @@ class LiftMethod(Protocol):
     """Signature every lifting method implements (see :func:`lift`)."""
 
     def __call__(self, uv: np.ndarray, skeleton: Skeleton, bone_lengths: np.ndarray,
-                 camera: Camera, *, hand: str, **params: Any) -> LiftResult: ...
+                 camera: Camera, *, hand: str, **params: Any) -> LiftResult:
+        """Lift ``uv`` to 3D; see :func:`lift`."""
 
 
 _METHODS: dict[str, LiftMethod] = {}

@@ -53,7 +53,7 @@ def flip_costs(magnitude: np.ndarray, floor: np.ndarray) -> np.ndarray:
 
 
 def _product(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """``a @ b`` for stacks of 2×2 matrices, rescaled to a largest entry of 1."""
+    """Multiply stacks of 2×2 matrices, ``a @ b``, rescaled to a largest entry of 1."""
     out = np.empty(np.broadcast_shapes(a.shape, b.shape))
     a0, a1 = a[..., 0, :], a[..., 1, :]
     b0, b1 = b[..., :, 0], b[..., :, 1]

@@ -1,5 +1,4 @@
-"""The thesis's depth reconstruction (§3.5–3.6, §4.1.1.4): methods ``thesis`` and
-``thesis-nocheck``.
+"""The thesis's depth reconstruction (§3.5–3.6, §4.1.1.4): ``thesis``, ``thesis-nocheck``.
 
 Every frame gets the scale of eq. 6 (the smallest scale giving every bone a real depth);
 every bone's depth span follows from eq. 5, walking from the root to the tips. Each bone
