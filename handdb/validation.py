@@ -123,9 +123,9 @@ def validation_table(clip_id: str, truth: np.ndarray,
         columns["joint"] += list(skeleton.joints)
         for key, values in stats.items():
             columns[key] += list(values)
-    n_sign = np.asarray(columns["n_sign"])
-    root_rows = np.asarray(columns["joint"]) == skeleton.joints[skeleton.root]
-    columns["n_sign"] = np.where(root_rows, None, n_sign).tolist()
+    root = skeleton.joints[skeleton.root]
+    columns["n_sign"] = [None if joint == root else int(n)
+                         for joint, n in zip(columns["joint"], columns["n_sign"], strict=True)]
     return tables.from_columns("validation_joint", {
         "clip_id": clip_id, **columns, "units": units})
 

@@ -161,6 +161,19 @@ def orthographic_points(uv: np.ndarray, scale: np.ndarray, z: np.ndarray) -> np.
     return np.concatenate([uv / scale[:, None, None], z[..., None]], axis=-1)
 
 
+def intrinsics(camera: Camera) -> tuple[float, float, float, float]:
+    """``(fx, fy, cx, cy)`` of a pinhole camera, pixels.
+
+    Raises
+    ------
+    ValueError
+        If the camera lacks one of them.
+    """
+    if camera.fx is None or camera.fy is None or camera.cx is None or camera.cy is None:
+        raise ValueError(f"a pinhole camera needs fx, fy, cx and cy (pixels), got {camera}")
+    return camera.fx, camera.fy, camera.cx, camera.cy
+
+
 def centred_pixels(uv: np.ndarray, camera: Camera) -> np.ndarray:
     """Image points a scaled orthographic model can use, ``(T, J, 2) float64`` pixels.
 
@@ -170,6 +183,5 @@ def centred_pixels(uv: np.ndarray, camera: Camera) -> np.ndarray:
     """
     if camera.model != "pinhole":
         return uv
-    focal = 0.5 * (camera.fx + camera.fy)
-    centre = np.array([camera.cx, camera.cy])
-    return (uv - centre) * (focal / np.array([camera.fx, camera.fy]))
+    fx, fy, cx, cy = intrinsics(camera)
+    return (uv - np.array([cx, cy])) * (0.5 * (fx + fy) / np.array([fx, fy]))

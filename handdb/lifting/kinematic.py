@@ -382,6 +382,8 @@ def _chosen_points(solution: SignSolution, skeleton: Skeleton) -> np.ndarray:
     """Joint positions of a pinhole solution, picked from its candidates, ``(T, J, 3)``."""
     layout = hand_layout(skeleton)
     candidates = solution.candidates
+    if candidates.palm is None or candidates.joints is None:
+        raise ValueError("positions can only be picked from perspective candidates")
     frames = np.arange(len(solution.palm_state))
     xyz = candidates.palm[frames, solution.palm_state].copy()
     pick = (solution.finger_signs < 0).astype(np.int64)                  # (T, F, 3)

@@ -18,6 +18,7 @@ from __future__ import annotations
 import numpy as np
 
 from handdb.clip import Camera
+from handdb.lifting.geometry import intrinsics
 from handdb.lifting.temporal import smooth_scale
 from handdb.skeletons import Skeleton
 
@@ -43,8 +44,9 @@ EXCESS_TOLERANCE = 0.01
 
 def camera_rays(uv: np.ndarray, camera: Camera) -> np.ndarray:
     """Ray direction of each image point with unit depth, ``(T, J, 3) float64``."""
-    x = (uv[..., 0] - camera.cx) / camera.fx
-    y = (uv[..., 1] - camera.cy) / camera.fy
+    fx, fy, cx, cy = intrinsics(camera)
+    x = (uv[..., 0] - cx) / fx
+    y = (uv[..., 1] - cy) / fy
     return np.stack([x, y, np.ones_like(x)], axis=-1)
 
 
@@ -194,7 +196,8 @@ def estimate_root_depth(uv: np.ndarray, skeleton: Skeleton, bone_lengths: np.nda
     numpy.ndarray
         ``(T,) float64``, clip units.
     """
-    focal = 0.5 * (camera.fx + camera.fy)
+    fx, fy, _, _ = intrinsics(camera)
+    focal = 0.5 * (fx + fy)
     bound = deepest_feasible_root(camera_rays(uv, camera), focal / weak_scale, skeleton,
                                   bone_lengths, bone_dz)
     return 1.0 / smooth_scale(1.0 / bound, ROOT_DEPTH_PERCENTILE, ROOT_DEPTH_HALF_WINDOW)

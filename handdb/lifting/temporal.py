@@ -150,6 +150,6 @@ def smooth_scale(bounds: np.ndarray, percentile: float = SCALE_PERCENTILE,
     return gaussian_filter1d(upper, SCALE_SMOOTHING_FRAMES, mode="nearest")
 
 
-def sigmoid(x: np.ndarray) -> np.ndarray:
+def sigmoid(x: np.ndarray | float) -> np.ndarray:
     """Logistic function, numerically safe for large ``|x|``."""
     return 0.5 * (1.0 + np.tanh(0.5 * x))
