@@ -203,6 +203,7 @@ def plot_errors(
     axes.set_xticks((np.arange(shown.size) + 0.5) * n_frames,
                     [skeleton.joints[j] for j in shown], rotation=60, fontsize=7)
     axes.set_yscale("symlog", linthresh=1.0)
+    axes.set_ylim(bottom=0.0)
     axes.set_ylabel("error, pixels (log above 1)")
     axes.set_xlabel("frames of each joint with hidden points")
     axes.set_title(title or f"gap-filling error per frame, mask {mask}")
