@@ -113,7 +113,7 @@ def seed_first_frame(uv: np.ndarray, missing: np.ndarray, skeleton: Skeleton) ->
     seeded[0] = carried[0]
     never_seen = np.unique(gaps.joint[gaps.whole_clip])
     if never_seen.size:
-        seeded[0] = place_from_rest_pose(uv[:1], missing[:1], skeleton, never_seen)[0]
+        seeded[0] = place_from_rest_pose(seeded[:1], missing[:1], skeleton, never_seen)[0]
     return seeded
 
 

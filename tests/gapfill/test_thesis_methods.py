@@ -95,3 +95,14 @@ def test_missing_first_frame_is_seeded_from_the_palm_and_flagged(thesis21):
     assert np.allclose(result.uv[0, j], uv[0, j])          # carried with the palm
     assert result.filled[:2, j].all()
     assert [(f.joint, f.kind) for f in result.flags_of(LEADING)] == [("index_pip", LEADING)]
+
+
+def test_a_never_seen_joint_and_a_late_one_both_start_from_a_complete_first_frame(thesis21):
+    uv = _still_hand(thesis21, 6)
+    late, never = thesis21.index("ring_tip"), thesis21.index("little_tip")
+    observed = np.ones((6, thesis21.n_joints), dtype=bool)
+    observed[:3, late] = False
+    observed[:, never] = False
+    result = fill_gaps(uv, observed, thesis21, "previous-diff")
+    assert np.isfinite(result.uv).all()
+    assert np.allclose(result.uv[:3, late], uv[0, late])     # the hand stands still
