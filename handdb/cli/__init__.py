@@ -199,9 +199,10 @@ def demo(inbox: str = InboxOption, db: str = DbOption) -> None:
 
 
 def _register_subcommands() -> None:
-    from handdb.cli import export, ratios
+    from handdb.cli import export, gapfill, ratios
 
     app.add_typer(ratios.app, name="ratios")
+    app.command("gapfill-eval")(gapfill.gapfill_eval)
     app.command("export-usd")(export.export_usd)
     app.command("export-bvh")(export.export_bvh)
 
