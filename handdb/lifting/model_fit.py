@@ -53,9 +53,15 @@ LOG_SCALE = N_DOF
 #: Starts tried on the first frame: the palm turned towards or away from the camera, tilted
 #: about the camera's x and y axes (degrees), and every finger joint flexed by each angle.
 FIRST_FRAME_TURNS_DEG = (0.0, 180.0)
-FIRST_FRAME_TILTS_DEG = (-45.0, -15.0, 15.0, 45.0)
-FIRST_FRAME_ROLLS_DEG = (-30.0, 0.0, 30.0)
+FIRST_FRAME_TILTS_DEG = (-30.0, 30.0)
+FIRST_FRAME_ROLLS_DEG = (-20.0, 20.0)
 FIRST_FRAME_FLEXION_DEG = (0.0, 35.0)
+
+#: A relaxed hand, every finger joint flexed this much (degrees), and the weight of a weak
+#: pull of the joint angles towards it (per rad², against pixels²): among poses that
+#: project alike (a finger bent towards the camera or away), it prefers the natural one.
+RELAXED_FLEXION_DEG = 20.0
+RELAXED_WEIGHT = 4.0
 
 #: Finite-difference step of the Jacobian.
 JACOBIAN_STEP = 1e-6
@@ -102,6 +108,14 @@ def _positions(model: HandModel, params: np.ndarray, camera: Camera) -> np.ndarr
     return forward_kinematics(model, pose)
 
 
+def _relaxed_pose(model: HandModel) -> np.ndarray:
+    """Parameters of the relaxed hand: every flexion at :data:`RELAXED_FLEXION_DEG`."""
+    relaxed = np.zeros(N_DOF + 1)
+    relaxed[6 + np.flatnonzero(model.dof_axis == AXES.index("flexion"))] = np.radians(
+        RELAXED_FLEXION_DEG)
+    return relaxed
+
+
 def _fit_frame(model: HandModel, camera: Camera, uv: np.ndarray, seen: np.ndarray,
                start: np.ndarray, anchor: np.ndarray | None) -> tuple[np.ndarray, float]:
     """Fit one frame's parameters; return them and the final cost."""
@@ -111,6 +125,9 @@ def _fit_frame(model: HandModel, camera: Camera, uv: np.ndarray, seen: np.ndarra
     upper = np.append(model.upper, np.inf)[free]
     target = uv[seen]
     pull = np.sqrt(SMOOTHNESS_WEIGHT / MARKER_WEIGHT)
+    relaxed = _relaxed_pose(model)
+    joint_angles = np.flatnonzero(free >= 6)
+    joint_angles = joint_angles[free[joint_angles] < N_DOF]
 
     def full(x: np.ndarray) -> np.ndarray:
         params = np.broadcast_to(start, x.shape[:-1] + start.shape).copy()
@@ -121,9 +138,10 @@ def _fit_frame(model: HandModel, camera: Camera, uv: np.ndarray, seen: np.ndarra
         params = full(x)
         image = _project(_positions(model, params, camera), params, camera)
         errors = (image[..., seen, :] - target).reshape(x.shape[:-1] + (-1,))
+        natural = np.sqrt(RELAXED_WEIGHT) * (x[..., joint_angles] - relaxed[free[joint_angles]])
         if anchor is None:
-            return errors
-        return np.concatenate([errors, pull * (x - anchor[free])], axis=-1)
+            return np.concatenate([errors, natural], axis=-1)
+        return np.concatenate([errors, natural, pull * (x - anchor[free])], axis=-1)
 
     steps = np.eye(len(free)) * JACOBIAN_STEP
 
