@@ -24,7 +24,17 @@ from handdb.fitting import (
     refine_poses,
     track,
 )
-from handdb.kinematics import AXES, ROOT_ROTATION, HandModel, build_hand_model, forward_kinematics
+from handdb.kinematics import (
+    AXES,
+    ROOT_POSITION,
+    ROOT_ROTATION,
+    HandModel,
+    build_hand_model,
+    forward_kinematics,
+    local_quaternions,
+    rest_offsets,
+)
+from handdb.rotations import JointMotion
 from handdb.subject_calibration import Calibration, calibrate
 
 #: Pose solver used unless asked otherwise: least squares, which reached the swarm's
@@ -146,6 +156,31 @@ def fit_markers(markers: np.ndarray, *, hand: str = "right", units: str = "mm",
     return MarkerFit(model=model, poses=poses, joints=joints / mm_per_unit,
                      residual=residual / mm_per_unit, calibration=calibration,
                      key_frames=keys)
+
+
+def joint_motion(fit: MarkerFit, units: str = "mm") -> JointMotion:
+    """The fit's local joint transforms, for the USD and BVH exporters (clip units).
+
+    Rotations are the model's own joint rotations (:func:`~handdb.kinematics.local_quaternions`)
+    rather than ones inferred from positions; translations are the model's bone offsets in
+    each parent's frame (``+Y`` along finger bones), the root's its world position.
+
+    Parameters
+    ----------
+    fit
+        A marker fit.
+    units
+        The clip's length unit, the unit of the translations.
+    """
+    mm_per_unit = METERS_PER_UNIT[units] * 1000.0
+    n_frames = len(fit.poses)
+    translations = np.repeat(rest_offsets(fit.model)[None] / mm_per_unit, n_frames, axis=0)
+    translations[:, fit.model.skeleton.root] = fit.poses[:, ROOT_POSITION] / mm_per_unit
+    rotations = local_quaternions(fit.model, fit.poses)
+    flips = np.sum(rotations[1:] * rotations[:-1], axis=-1) < 0
+    signs = np.concatenate([np.ones((1,) + flips.shape[1:]),
+                            np.cumprod(np.where(flips, -1.0, 1.0), axis=0)])
+    return JointMotion(rotations=rotations * signs[..., None], translations=translations)
 
 
 def joint_angles_table(clip_id: str, model: HandModel, poses: np.ndarray) -> pa.Table:

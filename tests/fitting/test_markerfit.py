@@ -6,9 +6,11 @@ from handdb.markerfit import (
     ROOT_AXES,
     fit_markers,
     joint_angles_table,
+    joint_motion,
     joints_3d_table,
     key_frames,
 )
+from handdb.rotations import forward_kinematics as motion_positions
 from handdb.tables import schema
 
 from .conftest import smooth_poses
@@ -87,3 +89,12 @@ def test_fit_without_bone_lengths_calibrates_them(true_model):
     assert fitted.calibration is not None
     assert np.abs(fitted.model.bone_lengths - true_model.bone_lengths).max() < 1.5
     assert np.linalg.norm(fitted.joints - truth, axis=-1).mean() < 1.5
+
+
+def test_joint_motion_rebuilds_the_fitted_joints(fit):
+    motion = joint_motion(fit, units="cm")
+    assert motion.rotations.shape == fit.joints.shape[:2] + (4,)
+    np.testing.assert_allclose(motion_positions(motion, fit.model.skeleton), fit.joints,
+                               atol=1e-9)
+    dots = np.sum(motion.rotations[1:] * motion.rotations[:-1], axis=-1)
+    assert np.all(dots >= 0.0)
