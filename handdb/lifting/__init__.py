@@ -4,11 +4,12 @@
 >>> result = lift(uv, skeleton, bone_lengths, camera, method="kinematic")  # doctest: +SKIP
 
 Methods: ``thesis`` and ``thesis-nocheck`` (the thesis's scaled-orthographic method with and
-without its reflective-ambiguity rule, :mod:`handdb.lifting.thesis`) and ``kinematic``, the
-default (:mod:`handdb.lifting.kinematic`).
+without its reflective-ambiguity rule, :mod:`handdb.lifting.thesis`), ``kinematic``, the
+default (:mod:`handdb.lifting.kinematic`), and ``kinematic-refined``, the default polished
+by nonlinear least squares (:mod:`handdb.lifting.refine`).
 """
 
-from handdb.lifting import kinematic, thesis  # noqa: F401  (registers the methods)
+from handdb.lifting import kinematic, refine, thesis  # noqa: F401  (registers the methods)
 from handdb.lifting.registry import (
     DEFAULT_METHOD,
     available_methods,
