@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import contextlib
 import os
+import signal
 import socket
 import subprocess
 import sys
@@ -26,6 +27,8 @@ SERVER_STARTUP_TIMEOUT_S = 120.0
 #: Seconds to wait for the server to stop before it is killed.
 SERVER_SHUTDOWN_TIMEOUT_S = 15.0
 DEPLOYMENT_NAME = "handdb-build"
+#: Scheduled builds run one at a time: a run due while another builds waits for it.
+CONCURRENT_BUILDS = 1
 
 
 def _free_port() -> int:
@@ -48,6 +51,20 @@ def _wait_healthy(api_url: str, process: subprocess.Popen, timeout: float) -> No
         time.sleep(0.5)
     raise TimeoutError(f"the local Prefect server at {api_url} did not answer within "
                        f"{timeout:.0f} s")
+
+
+def _interrupt(signum: int, frame: object) -> None:
+    raise KeyboardInterrupt(f"stopped by signal {signal.Signals(signum).name}")
+
+
+@contextlib.contextmanager
+def stop_on_sigterm() -> Iterator[None]:
+    """Treat SIGTERM like Ctrl-C for the block, so its clean-up runs (the local server stops)."""
+    previous = signal.signal(signal.SIGTERM, _interrupt)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, previous)
 
 
 @contextlib.contextmanager
@@ -86,12 +103,17 @@ def _absolute(location: str) -> str:
 
 def serve_build(inbox: str, db: str, *, cron: str | None = None,
                 interval: float | None = None) -> None:
-    """Serve the build of ``inbox`` into ``db`` on a cron or interval schedule until stopped."""
+    """Serve the build of ``inbox`` into ``db`` on a cron or interval schedule until stopped.
+
+    Stops on Ctrl-C or SIGTERM, and then stops the local Prefect server it started.
+    """
     from prefect.settings import PREFECT_API_URL, temporary_settings
 
     from flows.build import build
 
     parameters = {"inbox": _absolute(inbox), "db": _absolute(db)}
-    with prefect_api() as api_url, temporary_settings({PREFECT_API_URL: api_url}):
+    with stop_on_sigterm(), prefect_api() as api_url, \
+            temporary_settings({PREFECT_API_URL: api_url}):
         build.serve(name=DEPLOYMENT_NAME, cron=cron, interval=interval, parameters=parameters,
-                    pause_on_shutdown=False, print_starting_message=True)
+                    pause_on_shutdown=False, print_starting_message=True,
+                    limit=CONCURRENT_BUILDS)
