@@ -59,7 +59,11 @@ def _interrupt(signum: int, frame: object) -> None:
 
 @contextlib.contextmanager
 def stop_on_sigterm() -> Iterator[None]:
-    """Treat SIGTERM like Ctrl-C for the block, so its clean-up runs (the local server stops)."""
+    """Treat SIGTERM like Ctrl-C for the block, so its clean-up runs (the local server stops).
+
+    Prefect's runner handles SIGTERM itself once it serves; this covers the time before,
+    while the local server starts.
+    """
     previous = signal.signal(signal.SIGTERM, _interrupt)
     try:
         yield
