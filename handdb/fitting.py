@@ -136,7 +136,7 @@ def marker_distances(predicted: np.ndarray, observed: np.ndarray, visible: np.nd
 
 def marker_term(predicted: np.ndarray, observed: np.ndarray, visible: np.ndarray,
                 cutoff: float = MARKER_CUTOFF_MM, correspondence: str = "labelled") -> np.ndarray:
-    """The robust marker term ``Em`` of eq. 4, ``(...)``, mm.
+    """Evaluate the robust marker term ``Em`` of eq. 4, ``(...)``, mm.
 
     Each model marker costs its distance to its observed marker, at most ``cutoff``; the
     labelled term averages over visible markers, the nearest-neighbour term over all model
@@ -232,6 +232,16 @@ def fit_pose_pso(model: HandModel, observed: np.ndarray, visible: np.ndarray,
         ``(..., J, 3)`` markers in mm (NaN where missing) and ``(..., J) bool``.
     start, anchor
         ``(..., 33)`` the seed and the pose the smoothness term pulls towards.
+    anchor_weight
+        Weight of ``‖q − anchor‖`` (λc of eq. 3, or λ of eq. 12).
+    cutoff
+        Cut-off ``T`` of the marker term, mm.
+    correspondence
+        ``"labelled"`` or ``"nearest"`` (see :func:`marker_distances`).
+    settings
+        Swarm settings; default the paper's.
+    rng
+        Source of random numbers; default seeded with 0.
 
     Returns
     -------
@@ -272,12 +282,18 @@ def fit_pose_lsq(model: HandModel, observed: np.ndarray, visible: np.ndarray,
 
     Parameters
     ----------
+    model
+        The hand model (bone lengths in mm).
     observed, visible
         ``(J, 3)`` markers in mm and ``(J,) bool``.
     start
         ``(33,)`` initial pose.
     anchor
         ``(33,)`` pose the regulariser pulls towards, or ``None`` for none.
+    anchor_weight
+        Weight λ of the regulariser.
+    cutoff
+        Cut-off ``T``, mm: the scale of the Cauchy loss.
 
     Returns
     -------
@@ -307,13 +323,15 @@ def fit_pose_lsq(model: HandModel, observed: np.ndarray, visible: np.ndarray,
 
 
 def initial_pose(model: HandModel, observed: np.ndarray, visible: np.ndarray) -> np.ndarray:
-    """A first pose for a frame with no predecessor (the paper's ICP plus IK start).
+    """Find a first pose for a frame with no predecessor (the paper's ICP plus IK start).
 
     The rest pose is rigidly aligned to the visible markers (Kabsch, labelled markers; the
     palm's when at least three are visible, else all), then fitted by least squares.
 
     Parameters
     ----------
+    model
+        The hand model (bone lengths in mm).
     observed, visible
         ``(J, 3)`` markers in mm and ``(J,) bool``; at least three visible.
 
@@ -370,6 +388,8 @@ def track(model: HandModel, markers: np.ndarray, *, solver: str = "lsq",
         ``"lsq"`` or ``"pso"``.
     start
         ``(33,)`` pose before the first frame; default :func:`initial_pose` of frame 0.
+    correspondence, cutoff, settings, rng
+        As for :func:`fit_pose_pso`.
 
     Returns
     -------
@@ -423,10 +443,18 @@ def refine_poses(model: HandModel, markers: np.ndarray, guesses: np.ndarray, *,
 
     Parameters
     ----------
+    model
+        The hand model (bone lengths in mm).
     markers
         ``(F, J, 3)`` markers in mm, NaN where missing.
     guesses
         ``(F, 33)`` interpolated poses ``q̂``.
+    solver
+        ``"lsq"`` or ``"pso"``.
+    weight
+        λ of eq. 12.
+    cutoff, settings, rng
+        As for :func:`fit_pose_pso`.
 
     Returns
     -------
@@ -457,10 +485,20 @@ def filter_and_refine(model: HandModel, markers: np.ndarray, poses: np.ndarray, 
 
     Parameters
     ----------
+    model
+        The hand model (bone lengths in mm).
     markers
         ``(T, J, 3)`` markers in mm, NaN where missing.
     poses
         ``(T, 33)`` fitted poses.
+    passes
+        Number of filter-and-refit passes.
+    window
+        Frames in the running median.
+    weight
+        λ of the pull towards the filtered pose (eq. 12).
+    cutoff
+        Cut-off ``T``, mm.
 
     Returns
     -------

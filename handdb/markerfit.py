@@ -159,7 +159,7 @@ def fit_markers(markers: np.ndarray, *, hand: str = "right", units: str = "mm",
 
 
 def joint_motion(fit: MarkerFit, units: str = "mm") -> JointMotion:
-    """The fit's local joint transforms, for the USD and BVH exporters (clip units).
+    """Return the fit's local joint transforms for the USD and BVH exporters (clip units).
 
     Rotations are the model's own joint rotations (:func:`~handdb.kinematics.local_quaternions`)
     rather than ones inferred from positions; translations are the model's bone offsets in

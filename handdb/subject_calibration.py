@@ -28,6 +28,7 @@ import pyarrow as pa
 from scipy.optimize import least_squares
 
 from handdb import tables
+from handdb.clip import METERS_PER_UNIT
 from handdb.fitting import SOLVER_TOLERANCE, fit_pose_lsq, initial_pose
 from handdb.kinematics import N_DOF, HandModel, forward_kinematics
 from handdb.ratios import bone_ratios, joint_ratios, table1_measurements
@@ -83,6 +84,8 @@ def measured_lengths(model: HandModel, markers: np.ndarray) -> tuple[np.ndarray,
 
     Parameters
     ----------
+    model
+        The hand model whose lengths stand in for bones never seen.
     markers
         ``(T, J, 3)`` mm, NaN where missing.
 
@@ -111,6 +114,8 @@ def select_frames(visible: np.ndarray, n: int = CALIBRATION_FRAMES) -> np.ndarra
     ----------
     visible
         ``(T, J) bool``.
+    n
+        Number of frames wanted.
 
     Returns
     -------
@@ -257,8 +262,8 @@ def calibrate(model: HandModel, markers: np.ndarray, *, n_frames: int = CALIBRAT
                        n_frames=counts)
 
 
-def bone_length_table(clip_id: str, subject: str, calibration: Calibration, units: str,
-                      mm_per_unit: float) -> pa.Table:
+def bone_length_table(clip_id: str, subject: str, calibration: Calibration,
+                      units: str) -> pa.Table:
     """Rows of table ``bone_lengths`` for a calibration, source ``calibrated``.
 
     Parameters
@@ -267,10 +272,10 @@ def bone_length_table(clip_id: str, subject: str, calibration: Calibration, unit
         The clip and its subject.
     calibration
         The result of :func:`calibrate` (mm).
-    units, mm_per_unit
-        The clip's length units and millimetres per unit; lengths and residuals are
-        written in clip units.
+    units
+        The clip's length unit; lengths and residuals are written in it.
     """
+    mm_per_unit = METERS_PER_UNIT[units] * 1000.0
     skeleton = calibration.model.skeleton
     bones = skeleton.bones
     detail = (f"Levenberg-Marquardt over {len(calibration.frames)} frames, "

@@ -67,8 +67,9 @@ RELAXED_WEIGHT = 4.0
 JACOBIAN_STEP = 1e-6
 
 
-def _model_lengths(skeleton: Skeleton, bone_lengths: np.ndarray, hand: str) -> tuple[HandModel, float]:
-    """The hand model with the clip's bone lengths, in template millimetres.
+def _model_lengths(skeleton: Skeleton, bone_lengths: np.ndarray,
+                   hand: str) -> tuple[HandModel, float]:
+    """Build the hand model with the clip's bone lengths, in template millimetres.
 
     Returns the model and ``k``, template millimetres per clip unit (the median ratio of
     the template's lengths to the clip's); bones the clip's skeleton lacks keep the

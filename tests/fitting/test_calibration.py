@@ -73,7 +73,7 @@ def test_calibration_frames_are_rich_and_spread():
 
 
 def test_bone_length_rows_are_in_clip_units(calibration):
-    table = bone_length_table("clip", "s01", calibration, "cm", 10.0)
+    table = bone_length_table("clip", "s01", calibration, "cm")
     assert table.schema.equals(tables.schema("bone_lengths"))
     assert table.num_rows == 20
     assert set(table.column("source").to_pylist()) == {CALIBRATED_SOURCE}

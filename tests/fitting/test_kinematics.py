@@ -81,7 +81,8 @@ def test_flexion_bends_fingers_towards_the_palm(model):
                if model.skeleton.joints[j] == "index_pip" and AXES[a] == "flexion"][0]
     pose[6 + flexion] = np.radians(60)
     tip = model.skeleton.index("index_tip")
-    assert forward_kinematics(model, pose)[tip, 2] > forward_kinematics(model, model.rest_pose())[tip, 2] + 10
+    rest = forward_kinematics(model, model.rest_pose())
+    assert forward_kinematics(model, pose)[tip, 2] > rest[tip, 2] + 10
 
 
 def test_clipping_respects_the_joint_limits(model):

@@ -1,7 +1,7 @@
+import c3d
 import numpy as np
 import pytest
 
-import c3d
 from handdb.errors import InputError
 from handdb.markers import dense_markers
 from handdb.readers import c3d as c3d_reader
