@@ -41,8 +41,11 @@ from handdb.subject_calibration import Calibration, calibrate
 #: accuracy many times faster (``benchmarks/bench_fitting.py``).
 DEFAULT_SOLVER = "lsq"
 
-#: Frames from one key frame to the next; the paper's Vicon ran at four times its Kinect.
-KEY_STEP = 4
+#: Frames from one key frame to the next. The paper's key frames are its Kinect frames
+#: (a quarter of its Vicon frames); with markers alone every frame can be a key frame,
+#: which measured more accurate on fast motion (2.3 mm against 3.2 mm MPJPE with a step of
+#: 4, ``benchmarks/bench_fitting.py``); a larger step trades accuracy for speed.
+KEY_STEP = 1
 
 #: Name of the method in ``joints_3d.lift_method``.
 METHOD_NAME = "model-fit"
