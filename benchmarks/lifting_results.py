@@ -217,8 +217,7 @@ def main() -> None:
     lines += (synthetic_section() + refinement_section() + dhg_section()
               + thesis_section())
     lines += ["## Throughput", "", *throughput_table((400, 10_000)), "",
-              "The pinhole kinematic lift at 100 000 frames is left out (its root-depth "
-              "search walks 48 candidate depths per frame); run "
+              "Blank: not timed (the refinement beyond 400 frames). Run "
               "`benchmarks/bench_lifting.py` for 100 000-frame clips.", ""]
     text = "\n".join(lines)
     OUT.write_text(text)
