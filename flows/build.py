@@ -158,7 +158,7 @@ def commit(result: pipeline.ClipResult | Refusal, clip_id: str, db: str, inbox: 
 
 
 def artifact_key(kind: str, clip_id: str) -> str:
-    """A Prefect artifact key (lowercase letters, digits, dashes) for a clip."""
+    """Return a Prefect artifact key (lowercase letters, digits, dashes) for a clip."""
     return re.sub(r"[^a-z0-9-]+", "-", f"{kind}-{clip_id}".lower()).strip("-")
 
 
@@ -187,7 +187,7 @@ def _chain_failure(chain: dict[str, PrefectFuture]) -> str | None:
 
 def task_runner(runner: str = "thread", workers: int = DEFAULT_WORKERS,
                 dask_address: str | None = None) -> Any:
-    """The task runner for per-clip tasks: a bounded thread pool, or Dask.
+    """Choose the task runner for per-clip tasks: a bounded thread pool, or Dask.
 
     ``dask`` starts a local Dask cluster of ``workers`` processes unless ``dask_address``
     names an existing scheduler.
@@ -291,7 +291,7 @@ def build(
 
 
 def summary_markdown(summary: BuildSummary) -> str:
-    """A markdown report of a build."""
+    """Write a markdown report of a build."""
     lines = [
         f"# handdb build {summary.run_id}",
         "",
