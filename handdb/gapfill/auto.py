@@ -121,7 +121,7 @@ def _long_gap_fill(
     hidden = validation_mask(missing, gaps)
     trial_missing = missing | hidden
     trial_local = np.where(hidden[..., None], np.nan, local)
-    trial_filled = np.where(hidden[..., None], interpolate_gaps(trial_local, trial_missing), filled)
+    trial_filled = np.where(hidden[..., None], np.nan, filled)
     trials = estimate_long_gaps(VALIDATED_ESTIMATES, trial_local, trial_filled, trial_missing,
                                 find_gaps(hidden), skeleton, variance)
     errors = np.array([np.sum(np.where(hidden, np.sum((trial - local) ** 2, axis=-1), 0.0), axis=0)

@@ -18,7 +18,7 @@ import numpy as np
 
 from handdb.gapfill.rest_pose import rest_pose_2d
 from handdb.gapfill.rigid import MIN_PALM_POINTS, palm_joints
-from handdb.gapfill.transfer import AFFINE, NO_MAP, apply_linear, fit_maps
+from handdb.gapfill.transfer import AFFINE, NO_MAP, apply_linear, fit_maps, inverse_2x2
 from handdb.skeletons import Skeleton
 
 
@@ -83,7 +83,7 @@ def palm_motion(uv: np.ndarray, missing: np.ndarray, skeleton: Skeleton) -> Palm
         linear, offset, kind = fit_maps(_repeat(reference, len(uv)), points, seen)
         fitted = kind == AFFINE
         shaping = complete if complete.any() else fitted
-        inverse = np.linalg.inv(np.where(fitted[:, None, None], linear, np.eye(2)))
+        inverse = inverse_2x2(np.where(fitted[:, None, None], linear, np.eye(2)))
         canonical = apply_linear(inverse, np.nan_to_num(points) - offset[:, None])
         canonical = np.where((seen & shaping[:, None])[..., None], canonical, np.nan)
         seen_once = ~np.isnan(canonical[..., 0]).all(axis=0)
@@ -105,8 +105,7 @@ def palm_motion(uv: np.ndarray, missing: np.ndarray, skeleton: Skeleton) -> Palm
 
 def to_palm_frame(uv: np.ndarray, motion: PalmMotion) -> np.ndarray:
     """Express image points in the palm frame, ``(T, J, 2) -> (T, J, 2)``."""
-    inverse = np.linalg.inv(motion.linear)
-    return apply_linear(inverse, uv - motion.offset[:, None])
+    return apply_linear(inverse_2x2(motion.linear), uv - motion.offset[:, None])
 
 
 def to_image(points: np.ndarray, motion: PalmMotion) -> np.ndarray:

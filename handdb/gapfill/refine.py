@@ -87,14 +87,14 @@ def refine_bone_lengths(
     bounds = bone_bounds(uv, missing, skeleton, bone_lengths=bone_lengths, scale=scale)
     refined = uv.copy()
     for b, (parent, child) in enumerate(skeleton.bones):
-        bone = refined[:, child] - refined[:, parent]
+        rows = np.flatnonzero(missing[:, child] | missing[:, parent])
+        bone = refined[rows, child] - refined[rows, parent]
         length = np.linalg.norm(bone, axis=-1)
-        shrink = (bounds[:, b] / np.maximum(length, np.finfo(float).tiny))[:, None]
-        too_long = (length > bounds[:, b])[:, None]
-        move_child = too_long & missing[:, child, None]
-        move_parent = too_long & ~missing[:, child, None] & missing[:, parent, None]
-        refined[:, child] = np.where(move_child, refined[:, parent] + bone * shrink,
-                                     refined[:, child])
-        refined[:, parent] = np.where(move_parent, refined[:, child] - bone * shrink,
-                                      refined[:, parent])
+        too_long = length > bounds[rows, b]
+        rows = rows[too_long]
+        bone = bone[too_long] * (bounds[rows, b] / length[too_long])[:, None]
+        moves_child = missing[rows, child]
+        refined[rows[moves_child], child] = refined[rows[moves_child], parent] + bone[moves_child]
+        refined[rows[~moves_child], parent] = (refined[rows[~moves_child], child]
+                                               - bone[~moves_child])
     return refined

@@ -10,9 +10,13 @@ asked to extrapolate far cannot throw the point across the image.
 
 It is the low-rank idea (other joints predict the missing one) fitted per gap, without
 iterations. Palm points are left out as predictors: in the palm frame they hardly move.
+The regressions of many gaps are fitted at once: each gap's training frames and predictors
+are masks over a padded window, and the stacked normal equations are solved together.
 """
 
 from __future__ import annotations
+
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -28,15 +32,130 @@ MIN_TRAINING_FRAMES = 10
 RANGE_MARGIN = 0.25
 #: Predictor spread (coordinate units) below which a predictor is not scaled up.
 MIN_SPREAD = 1e-6
+#: Gaps whose regressions are stacked in one batch (bounds the memory of the samples).
+BATCH_GAPS = 32
 
 
-def _fit_predict(train_x: np.ndarray, train_y: np.ndarray, query_x: np.ndarray) -> np.ndarray:
-    mean_x, mean_y = train_x.mean(axis=0), train_y.mean(axis=0)
-    spread = np.maximum(train_x.std(axis=0), MIN_SPREAD)
-    x = (train_x - mean_x) / spread
-    gram = x.T @ x + RIDGE * len(x) * np.eye(x.shape[1])
-    weights = np.linalg.solve(gram, x.T @ (train_y - mean_y))
-    return ((query_x - mean_x) / spread) @ weights + mean_y
+@dataclass(frozen=True)
+class _Samples:
+    """The coordinates the regressions read, shared by every gap of a clip.
+
+    Attributes
+    ----------
+    columns
+        ``(C,) int64``: the joints read (predictors and the gaps' joints).
+    centre
+        ``(2 C,) float64``: the observed mean of each coordinate.
+    values
+        ``(T + 1, 2 C + 1) float64``: the coordinates minus ``centre``, 0 where missing,
+        then a column of ones (so one matrix product gives counts, sums and scatter); the
+        last row, all zeros, stands for "no sample".
+    missing_bits
+        ``(T,) int64``: bit ``c`` set where joint ``columns[c]`` is missing.
+    """
+
+    columns: np.ndarray
+    centre: np.ndarray
+    values: np.ndarray
+    missing_bits: np.ndarray
+
+
+def _bit_sets(members: np.ndarray) -> np.ndarray:
+    """``(N, C) bool -> (N,) int64``: bit ``c`` set where column ``c`` is a member (C < 63)."""
+    return members @ np.left_shift(1, np.arange(members.shape[1], dtype=np.int64))
+
+
+def _samples(uv: np.ndarray, missing: np.ndarray, columns: np.ndarray) -> _Samples:
+    n_frames = uv.shape[0]
+    seen = np.repeat(~missing[:, columns], 2, axis=1)
+    coordinates = np.where(seen, uv[:, columns].reshape(n_frames, -1), 0.0)
+    centre = coordinates.sum(axis=0) / np.maximum(seen.sum(axis=0), 1)
+    values = np.zeros((n_frames + 1, coordinates.shape[1] + 1))
+    values[:-1, :-1] = np.where(seen, coordinates - centre, 0.0)
+    values[:-1, -1] = 1.0
+    return _Samples(columns, centre, values, _bit_sets(missing[:, columns]))
+
+
+def _training_frames(samples: _Samples, gaps: Gaps, needed: np.ndarray) -> np.ndarray:
+    """The frames within :data:`WINDOW` of each gap where its ``needed`` columns are seen.
+
+    ``needed`` ``(G, C) bool`` marks the columns that must be observed in a training frame.
+    Returns ``(G, F) int64`` rows of ``samples.values``: the window's frames, with the
+    "no sample" row ``T`` where a frame does not train (or pads the window).
+    """
+    n_frames = gaps.n_frames
+    low = np.maximum(gaps.start - WINDOW, 0)
+    high = np.minimum(gaps.stop + WINDOW, n_frames)
+    window = low[:, None] + np.arange(np.max(high - low))
+    inside = window < high[:, None]
+    window = np.minimum(window, n_frames - 1)
+    train = inside & ((samples.missing_bits[window] & _bit_sets(needed)[:, None]) == 0)
+    return np.where(train, window, n_frames)
+
+
+def _predict_gaps(
+    samples: _Samples, gaps: Gaps, usable: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """Fit each gap's ridge regression and predict its joint around and in the gap.
+
+    Parameters
+    ----------
+    samples
+        The clip's coordinates (:func:`_samples`).
+    gaps
+        ``G`` gaps, each of a joint among ``samples.columns``.
+    usable
+        ``(G, C) bool``: each gap's predictor joints, among ``samples.columns``.
+
+    Returns
+    -------
+    predicted
+        ``(G, L + 2, 2) float64``, pixels: predictions at frames ``start - 1`` to ``stop``
+        of each gap (clipped into the clip; ``L`` the longest gap).
+    ok
+        ``(G,) bool``: the gap had a predictor and enough training frames.
+    """
+    target = np.searchsorted(samples.columns, gaps.joint)
+    own = np.arange(samples.columns.size) == target[:, None]
+    x = samples.values[_training_frames(samples, gaps, usable | own)]
+    moments = np.swapaxes(x, 1, 2) @ x
+    n_train = moments[:, -1, -1]
+    n = np.maximum(n_train, 1.0)[:, None]
+    mean = moments[:, :-1, -1] / n
+    scatter = moments[:, :-1, :-1] - n[..., None] * mean[:, :, None] * mean[:, None, :]
+    use = np.repeat(usable, 2, axis=1)
+    spread = np.where(use, np.maximum(np.sqrt(np.maximum(
+        np.diagonal(scatter, axis1=1, axis2=2), 0.0) / n), MIN_SPREAD), np.inf)
+    coordinates = 2 * target[:, None] + np.arange(2)
+    gram = scatter / spread[:, :, None] / spread[:, None, :]
+    gram += (RIDGE * n)[..., None] * np.eye(use.shape[1])
+    cross = np.take_along_axis(scatter, coordinates[:, None, :], axis=2) / spread[..., None]
+    weights = np.linalg.solve(gram, cross)
+    around = np.clip(gaps.start[:, None] - 1 + np.arange(np.max(gaps.length) + 2), 0,
+                     gaps.n_frames - 1)
+    standard = (samples.values[around, :-1] - mean[:, None]) / spread[:, None]
+    offset = np.take_along_axis(mean, coordinates, axis=1) + samples.centre[coordinates]
+    predicted = standard @ weights + offset[:, None]
+    ok = usable.any(axis=1) & (n_train >= MIN_TRAINING_FRAMES)
+    return predicted, ok
+
+
+def _blend_to_edges(
+    uv: np.ndarray, gaps: Gaps, predicted: np.ndarray, gap: np.ndarray, offset: np.ndarray
+) -> np.ndarray:
+    """Add to each gap's prediction its residuals at the bounding frames, blended across.
+
+    ``predicted`` is as returned by :func:`_predict_gaps`; ``gap`` and ``offset`` ``(N,)``
+    list the gaps' points (gap, frames after its start). Returns ``(N, 2)`` estimates.
+    """
+    rows = np.arange(len(gaps))
+    before = uv[np.maximum(gaps.start - 1, 0), gaps.joint] - predicted[:, 0]
+    after = (uv[np.minimum(gaps.stop, gaps.n_frames - 1), gaps.joint]
+             - predicted[rows, gaps.length + 1])
+    before = np.where(gaps.leading[:, None], after, before)
+    after = np.where(gaps.trailing[:, None], before, after)
+    share = ((offset + 1) / (gaps.length[gap] + 1))[:, None]
+    return predicted[gap, offset + 1] + (1 - share) * before[gap] + share * after[gap]
 
 
 def regression_fill(
@@ -61,32 +180,27 @@ def regression_fill(
         ``(T, J, 2) float64``: ``uv`` with the gaps filled, NaN where a gap had no
         predictor seen throughout it or too few training frames.
     """
+    filled = uv.copy()
+    if not len(gaps):
+        return filled
     n_frames = uv.shape[0]
     missing_so_far = np.vstack([np.zeros((1, missing.shape[1]), dtype=np.int64),
                                 np.cumsum(missing, axis=0)])
     seen = np.where(missing[..., None], np.nan, uv)
     low, high = np.nanmin(seen, axis=0), np.nanmax(seen, axis=0)
     margin = RANGE_MARGIN * (high - low)
-    filled = uv.copy()
-    for joint, start, stop in zip(gaps.joint, gaps.start, gaps.stop, strict=True):
-        first, last = max(start - 1, 0), min(stop + 1, n_frames)
-        usable = predictors & (missing_so_far[last] == missing_so_far[first])
-        usable[joint] = False
-        frames = np.arange(max(start - WINDOW, 0), min(stop + WINDOW, n_frames))
-        frames = frames[~missing[frames][:, usable].any(axis=1) & ~missing[frames, joint]]
-        if not usable.any() or frames.size < MIN_TRAINING_FRAMES:
-            filled[start:stop, joint] = np.nan
-            continue
-        bounded = np.arange(first, last)
-        predicted = _fit_predict(uv[frames][:, usable].reshape(frames.size, -1), uv[frames, joint],
-                                 uv[bounded][:, usable].reshape(bounded.size, -1))
-        residual_before = uv[start - 1, joint] - predicted[0] if start > 0 else None
-        residual_after = uv[stop, joint] - predicted[-1] if stop < n_frames else None
-        residual_before = residual_after if residual_before is None else residual_before
-        residual_after = residual_before if residual_after is None else residual_after
-        share = ((np.arange(start, stop) - (start - 1)) / (stop - start + 1))[:, None]
-        inside = predicted[start - first:start - first + stop - start]
-        estimate = inside + (1 - share) * residual_before + share * residual_after
-        filled[start:stop, joint] = np.clip(estimate, low[joint] - margin[joint],
-                                            high[joint] + margin[joint])
+    gap_joints = np.zeros_like(predictors)
+    gap_joints[gaps.joint] = True
+    columns = np.flatnonzero(predictors | gap_joints)
+    samples = _samples(uv, missing, columns)
+    for batch in np.array_split(np.arange(len(gaps)), -(-len(gaps) // BATCH_GAPS)):
+        part = gaps.select(batch)
+        first = missing_so_far[np.maximum(part.start - 1, 0)][:, columns]
+        last = missing_so_far[np.minimum(part.stop + 1, n_frames)][:, columns]
+        usable = (first == last) & predictors[columns] & (columns != part.joint[:, None])
+        predicted, ok = _predict_gaps(samples, part, usable)
+        gap, frame, joint = part.frames()
+        estimate = np.clip(_blend_to_edges(uv, part, predicted, gap, frame - part.start[gap]),
+                           (low - margin)[joint], (high + margin)[joint])
+        filled[frame, joint] = np.where(ok[gap, None], estimate, np.nan)
     return filled

@@ -5,7 +5,7 @@ A set of points that moves rigidly in 3D, seen through an orthographic camera, m
 many pairs of configurations at once, the map from a *source* set of points to a *target*
 set (weighted least squares over the points present in both) and applies it to a query
 point. It fits an affine map where at least three points are present and well spread, a
-similarity (rotation, scale, translation; closed form with complex numbers) where two are,
+similarity (rotation, scale, translation; closed form) where two are,
 and a translation where one is.
 """
 
@@ -28,9 +28,24 @@ def apply_linear(linear: np.ndarray, points: np.ndarray) -> np.ndarray:
     return points @ np.swapaxes(linear, 1, 2)
 
 
+def inverse_2x2(matrices: np.ndarray) -> np.ndarray:
+    """Invert ``(N, 2, 2)`` matrices in closed form (no check: singular ones give inf/NaN)."""
+    (a, b), (c, d) = np.moveaxis(matrices, (-2, -1), (0, 1))
+    adjugate = np.stack([np.stack([d, -b], -1), np.stack([-c, a], -1)], -2)
+    return adjugate / (a * d - b * c)[..., None, None]
+
+
 def _weighted_mean(points: np.ndarray, weights: np.ndarray, count: np.ndarray) -> np.ndarray:
     total = (weights[:, None, :] @ np.nan_to_num(points))[:, 0]
     return total / np.maximum(count, 1)[:, None]
+
+
+def _well_spread(covariance: np.ndarray) -> np.ndarray:
+    """``(N,) bool``: the smaller principal spread of ``(N, 2, 2)`` covariances is at least
+    :data:`MIN_AFFINE_SPREAD` times the larger (closed-form eigenvalues)."""
+    half_sum = 0.5 * (covariance[:, 0, 0] + covariance[:, 1, 1])
+    radius = np.hypot(0.5 * (covariance[:, 0, 0] - covariance[:, 1, 1]), covariance[:, 0, 1])
+    return half_sum - radius > MIN_AFFINE_SPREAD * np.maximum(half_sum + radius, 1e-300)
 
 
 def fit_maps(
@@ -65,23 +80,23 @@ def fit_maps(
     dst_mean = _weighted_mean(target, w, count)
     src = np.where(weights[..., None], source - src_mean[:, None], 0.0)
     dst = np.where(weights[..., None], target - dst_mean[:, None], 0.0)
+    src_cov = np.swapaxes(src, 1, 2) @ src
+    cross = np.swapaxes(dst, 1, 2) @ src
 
-    src_z = src[..., 0] + 1j * src[..., 1]
-    dst_z = dst[..., 0] + 1j * dst[..., 1]
-    spread = np.sum(np.abs(src_z) ** 2, axis=1)
-    rotation = np.sum(dst_z * np.conj(src_z), axis=1) / np.where(spread > 0, spread, 1.0)
-    rotation = np.where(count >= 2, rotation, 1.0)
-    linear = np.stack([np.stack([rotation.real, -rotation.imag], -1),
-                       np.stack([rotation.imag, rotation.real], -1)], axis=-2)
+    # The best rotation-and-scale, as the complex number sum(dst * conj(src)) / sum|src|^2.
+    spread = src_cov[:, 0, 0] + src_cov[:, 1, 1]
+    turns = (count >= 2) & (spread > 0)
+    real = np.divide(cross[:, 0, 0] + cross[:, 1, 1], spread, out=np.ones_like(spread),
+                     where=turns)
+    imaginary = np.divide(cross[:, 1, 0] - cross[:, 0, 1], spread,
+                          out=np.zeros_like(spread), where=turns)
+    linear = np.stack([np.stack([real, -imaginary], -1), np.stack([imaginary, real], -1)], -2)
 
     kind = np.minimum(count, SIMILARITY)
     if affine:
-        src_cov = np.swapaxes(src, 1, 2) @ src
-        cross = np.swapaxes(dst, 1, 2) @ src
-        eig = np.linalg.eigvalsh(src_cov)
-        spread_ok = (count >= 3) & (eig[:, 0] > MIN_AFFINE_SPREAD * np.maximum(eig[:, 1], 1e-300))
+        spread_ok = (count >= 3) & _well_spread(src_cov)
         safe_cov = np.where(spread_ok[:, None, None], src_cov, np.eye(2))
-        linear = np.where(spread_ok[:, None, None], cross @ np.linalg.inv(safe_cov), linear)
+        linear = np.where(spread_ok[:, None, None], cross @ inverse_2x2(safe_cov), linear)
         kind = np.where(spread_ok, AFFINE, kind)
 
     offset = dst_mean - apply_linear(linear, src_mean)
