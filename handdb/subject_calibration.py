@@ -140,7 +140,12 @@ def default_ratio_prior(model: HandModel) -> tuple[np.ndarray, np.ndarray]:
 
 
 class _Problem:
-    """The calibration's unknowns and residuals, vectorised over leading batch axes."""
+    """The calibration's unknowns and residuals, vectorised over leading batch axes.
+
+    Unknowns: the logarithms of the finger bone lengths (so they stay positive, which LM
+    cannot otherwise enforce), each palm joint's offset from the wrist (3 numbers; its
+    length and direction) and every calibration frame's pose.
+    """
 
     def __init__(self, model: HandModel, markers: np.ndarray,
                  prior_lengths: np.ndarray, ratio_prior: tuple[np.ndarray, np.ndarray]):
@@ -166,14 +171,14 @@ class _Problem:
         self.frame_of_row = np.repeat(np.nonzero(self.visible)[0], 3)
 
     def pack(self, lengths: np.ndarray, palm: np.ndarray, poses: np.ndarray) -> np.ndarray:
-        return np.concatenate([lengths[self.finger_bones], palm.ravel(), poses.ravel()])
+        return np.concatenate([np.log(lengths[self.finger_bones]), palm.ravel(), poses.ravel()])
 
     def unpack(self, params: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         batch = params.shape[:-1]
         n_fingers = len(self.finger_bones)
         palm = params[..., n_fingers:self.n_shape].reshape(batch + (len(self.palm), 3))
         lengths = np.empty(batch + (len(self.model.bone_lengths),))
-        lengths[..., self.finger_bones] = params[..., :n_fingers]
+        lengths[..., self.finger_bones] = np.exp(params[..., :n_fingers])
         lengths[..., self.palm_bones] = np.linalg.norm(palm, axis=-1)
         directions = np.broadcast_to(self.model.rest_directions,
                                      batch + self.model.rest_directions.shape).copy()
