@@ -33,7 +33,7 @@ RANGE_MARGIN = 0.25
 #: Predictor spread (coordinate units) below which a predictor is not scaled up.
 MIN_SPREAD = 1e-6
 #: Gaps whose regressions are stacked in one batch (bounds the memory of the samples).
-BATCH_GAPS = 32
+BATCH_GAPS = 64
 
 
 @dataclass(frozen=True)
@@ -77,7 +77,7 @@ def _samples(uv: np.ndarray, missing: np.ndarray, columns: np.ndarray) -> _Sampl
 
 
 def _training_frames(samples: _Samples, gaps: Gaps, needed: np.ndarray) -> np.ndarray:
-    """The frames within :data:`WINDOW` of each gap where its ``needed`` columns are seen.
+    """Find the frames within :data:`WINDOW` of each gap where its ``needed`` columns are seen.
 
     ``needed`` ``(G, C) bool`` marks the columns that must be observed in a training frame.
     Returns ``(G, F) int64`` rows of ``samples.values``: the window's frames, with the

@@ -40,11 +40,12 @@ def _carry(
     uv: np.ndarray, missing: np.ndarray, reference: np.ndarray, frame: np.ndarray,
     joint: np.ndarray, basis: np.ndarray, affine: bool,
 ) -> np.ndarray:
-    carriers = np.flatnonzero(basis)
-    weights = (~missing[reference][:, carriers] & ~missing[frame][:, carriers]
-               & (carriers[None, :] != joint[:, None]))
+    carriers = np.flatnonzero(basis.any(axis=0))
+    before, now = reference[:, None], frame[:, None]
+    weights = (basis[joint][:, carriers] & ~missing[before, carriers]
+               & ~missing[now, carriers] & (carriers[None, :] != joint[:, None]))
     query = uv[reference, joint]
-    mapped, ok = map_points(uv[reference][:, carriers], uv[frame][:, carriers], weights, query,
+    mapped, ok = map_points(uv[before, carriers], uv[now, carriers], weights, query,
                             affine=affine)
     return np.where(ok[:, None], mapped, query)
 
@@ -63,7 +64,8 @@ def carry_across_gaps(
     gaps
         The gaps to fill; each must have an observed frame before or after it.
     basis
-        ``(J,) bool``: the joints whose motion carries the missing points.
+        ``(J,) bool``: the joints whose motion carries the missing points; or
+        ``(J, J) bool``: row ``j``, the joints that carry joint ``j``.
     affine
         Fit affine maps (else similarities).
 
@@ -72,6 +74,7 @@ def carry_across_gaps(
     numpy.ndarray
         ``(T, J, 2) float64``: ``uv`` with the gaps' points filled.
     """
+    basis = np.broadcast_to(basis, (uv.shape[1], uv.shape[1]))
     gap, frame, joint = gaps.frames()
     before = np.maximum(gaps.start[gap] - 1, 0)
     after = np.minimum(gaps.stop[gap], gaps.n_frames - 1)
@@ -133,6 +136,24 @@ def fill_rigid(
     return MethodOutput(filled)
 
 
+def parent_bones(skeleton: Skeleton) -> np.ndarray:
+    """``(J, J) bool``: row ``j``, the joints that carry joint ``j`` along its parent bone.
+
+    Those are its parent and grandparent; the palm joints for a joint hanging from the root
+    (its parent bone is the palm); none for the root.
+    """
+    carriers = np.zeros((skeleton.n_joints, skeleton.n_joints), dtype=bool)
+    for joint, parent in enumerate(skeleton.parents):
+        if parent < 0:
+            continue
+        grandparent = skeleton.parents[parent]
+        if grandparent < 0:
+            carriers[joint] = palm_joints(skeleton)
+        else:
+            carriers[joint, [parent, grandparent]] = True
+    return carriers
+
+
 def carry_along_chains(
     uv: np.ndarray, missing: np.ndarray, gaps: Gaps, skeleton: Skeleton
 ) -> np.ndarray:
@@ -141,8 +162,9 @@ def carry_along_chains(
     The bone from a joint's grandparent to its parent moves (in the image) by a similarity;
     applied to the joint's last known position before the gap and its first after it, and
     blended across the gap, it keeps the joint's angle to its parent bone changing
-    linearly through the gap. Joints are visited from the root outward, so a joint's
-    parent bone is complete (observed or already filled) when the joint is filled.
+    linearly through the gap. Joints are filled one depth at a time from the root outward,
+    so a joint's parent bone is complete (observed or already filled) when the joint is
+    filled.
 
     Parameters
     ----------
@@ -165,16 +187,12 @@ def carry_along_chains(
     unresolved = np.zeros_like(missing)
     _, frame, joint_of_point = gaps.frames()
     unresolved[frame, joint_of_point] = True
+    carriers = parent_bones(skeleton)
+    depth = skeleton.depth()
     filled = uv
-    for joint in np.unique(gaps.joint):
-        parent = skeleton.parents[joint]
-        grandparent = skeleton.parents[parent]
-        if grandparent < 0:
-            bone = palm_joints(skeleton)
-        else:
-            bone = np.zeros(skeleton.n_joints, dtype=bool)
-            bone[[parent, grandparent]] = True
-        filled = carry_across_gaps(filled, unresolved, gaps.select(gaps.joint == joint), bone,
+    for level in np.unique(depth[gaps.joint]):
+        at_level = depth[gaps.joint] == level
+        filled = carry_across_gaps(filled, unresolved, gaps.select(at_level), carriers,
                                    affine=False)
-        unresolved[:, joint] = False
+        unresolved[:, depth == level] = False
     return filled

@@ -41,8 +41,11 @@ def _weighted_mean(points: np.ndarray, weights: np.ndarray, count: np.ndarray) -
 
 
 def _well_spread(covariance: np.ndarray) -> np.ndarray:
-    """``(N,) bool``: the smaller principal spread of ``(N, 2, 2)`` covariances is at least
-    :data:`MIN_AFFINE_SPREAD` times the larger (closed-form eigenvalues)."""
+    """``(N,) bool``: the smaller principal spread of covariances is wide enough.
+
+    ``covariance`` is ``(N, 2, 2)``; its smaller eigenvalue (closed form) must exceed
+    :data:`MIN_AFFINE_SPREAD` times the larger.
+    """
     half_sum = 0.5 * (covariance[:, 0, 0] + covariance[:, 1, 1])
     radius = np.hypot(0.5 * (covariance[:, 0, 0] - covariance[:, 1, 1]), covariance[:, 0, 1])
     return half_sum - radius > MIN_AFFINE_SPREAD * np.maximum(half_sum + radius, 1e-300)

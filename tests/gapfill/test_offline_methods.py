@@ -153,3 +153,20 @@ def test_pchip_on_the_gaps_neighbourhood_equals_scipy_on_every_sample():
         at = np.clip(frames[~known], frames[known][0], frames[known][-1])
         expected = PchipInterpolator(frames[known], uv[known, j])(at)
         assert np.allclose(filled[~known, j], expected, rtol=0, atol=1e-12)
+
+
+@pytest.mark.parametrize("n_seen", [1, 2, 3, 4])
+def test_pchip_with_few_samples_equals_scipy_and_holds_the_ends(n_seen):
+    rng = np.random.default_rng(n_seen)
+    uv = rng.normal(size=(40, 1, 2)) * 10
+    seen_frames = np.sort(rng.choice(np.arange(3, 37), size=n_seen, replace=False))
+    missing = np.ones((40, 1), dtype=bool)
+    missing[seen_frames, 0] = False
+    filled = interpolate_gaps(np.where(missing[..., None], np.nan, uv), missing, "pchip")
+    at = np.clip(np.arange(40), seen_frames[0], seen_frames[-1])
+    if n_seen < 3:
+        expected = np.stack([np.interp(at, seen_frames, uv[seen_frames, 0, k]) for k in range(2)],
+                            axis=-1)
+    else:
+        expected = PchipInterpolator(seen_frames, uv[seen_frames, 0])(at)
+    assert np.allclose(filled[:, 0], expected, rtol=0, atol=1e-12)
