@@ -165,27 +165,27 @@ def palm_signs(xy: np.ndarray, abs_dz: np.ndarray, skeleton: Skeleton,
     quadratic = np.swapaxes(spans, 1, 2) @ residual @ spans              # (T, P, P)
     misfit = np.sum((quadratic @ combos.T) * combos.T, axis=1)          # (T, C)
     best = np.argmin(misfit, axis=1)
-    coef = np.einsum("tkq,tqp,tp->tk", fit, spans, combos[best])
-    tilt = coef[:, :2]
-    return combos[best] * continuity_signs(tilt)[:, None]
+    depths = spans @ combos[best][..., None]                             # (T, Q, 1)
+    return combos[best] * continuity_signs(depths[..., 0])[:, None]
 
 
-def continuity_signs(tilt: np.ndarray) -> np.ndarray:
-    """Signs that make a sequence of palm tilts, each known up to its sign, continuous.
+def continuity_signs(depths: np.ndarray) -> np.ndarray:
+    """Signs that make a sequence of palm poses, each known up to its mirror, continuous.
 
     Parameters
     ----------
-    tilt
-        ``(T, 2) float64``: the gradient of the palm plane's depth over the image plane,
-        per frame, with an arbitrary sign.
+    depths
+        ``(T, Q) float64``: depth of each palm joint relative to the root, per frame, with
+        an arbitrary overall sign.
 
     Returns
     -------
     numpy.ndarray
-        ``(T,) float64`` of ±1 such that consecutive signed tilts never point apart.
+        ``(T,) float64`` of ±1 such that consecutive signed palm depths never point apart
+        (their dot product is not negative).
     """
-    turn = np.ones(len(tilt))
-    turn[1:] = np.where(np.sum(tilt[1:] * tilt[:-1], axis=-1) < 0, -1.0, 1.0)
+    turn = np.ones(len(depths))
+    turn[1:] = np.where(np.sum(depths[1:] * depths[:-1], axis=-1) < 0, -1.0, 1.0)
     return np.cumprod(turn)
 
 
