@@ -8,6 +8,7 @@ from typing import Any, Protocol
 import numpy as np
 
 from handdb.clip import HANDS, Camera
+from handdb.errors import BoneLengthError
 from handdb.lifting.result import LiftResult
 from handdb.skeletons import Skeleton
 
@@ -77,8 +78,8 @@ def _check_inputs(uv: np.ndarray, skeleton: Skeleton, bone_lengths: np.ndarray,
     bad = [skeleton.joints[j] for j in bones
            if not (np.isfinite(bone_lengths[j]) and bone_lengths[j] > 0)]
     if bad:
-        raise ValueError(f"bone lengths must be positive and finite; missing or invalid for "
-                         f"{', '.join(bad)}")
+        raise BoneLengthError(f"bone lengths must be positive and finite; missing or invalid "
+                              f"for {', '.join(bad)} (skeleton '{skeleton.name}')")
     if hand not in HANDS:
         raise ValueError(f"hand must be one of {', '.join(HANDS)}, got {hand!r}")
 
@@ -122,7 +123,9 @@ def lift(
     Raises
     ------
     ValueError
-        On an unknown method, arrays of the wrong shape, or missing bone lengths.
+        On an unknown method or arrays of the wrong shape.
+    BoneLengthError
+        If a bone of the skeleton has no positive, finite length.
     """
     if method not in _METHODS:
         raise ValueError(f"unknown lifting method '{method}'; known: "

@@ -3,6 +3,7 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 from handdb.clip import Camera
+from handdb.errors import BoneLengthError
 from handdb.lifting import available_methods, bone_length_array, lift
 from handdb.skeletons import load_skeleton
 from handdb.synthetic.clips import synthesize_clip
@@ -154,5 +155,5 @@ def test_unknown_method_and_bad_shapes_are_refused(rapid_clip):
         lift(clip.uv[..., :1], skeleton, lengths, ORTHOGRAPHIC)
     short = lengths.copy()
     short[skeleton.index("index_tip")] = np.nan
-    with pytest.raises(ValueError, match="index_tip"):
+    with pytest.raises(BoneLengthError, match="index_tip"):
         lift(clip.uv, skeleton, short, ORTHOGRAPHIC)
