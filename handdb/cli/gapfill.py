@@ -1,48 +1,43 @@
-"""``handdb gapfill-eval``: score every gap-filling method on clips with full tracks.
+"""``handdb gapfill-eval``: score every gap-filling method on clips with complete tracks.
 
-Clips come from an inbox (only clips whose tracks are complete can be scored; with ground
-truth they also get the occlusion mask) or are synthesized (``--synthetic rapid``). Known
-points are hidden under each mask, filled by each method and compared with the truth. The
-command prints the RMSE of every method under every mask (pixels, over all hidden points
-of all clips), and writes table ``gapfill_eval`` as Parquet and a Figure-4.6-like chart
-per clip and mask into ``--out``.
+Clips come from the database (those whose every point is observed, e.g. the demo's
+``rapid-s01``), an inbox (``--inbox``) or are synthesized (``--synthetic rapid``). Known
+points are hidden under each mask, filled by each method and compared with the truth, in
+the flow :mod:`flows.gapfill_eval` (one task per clip). Table ``gapfill_eval`` (one
+partition per clip) and a Figure-4.6-like chart per clip (``<db>/reports/<clip_id>/
+gapfill.png``) land in the database; ``--out`` also writes them to a standalone folder.
+The command prints the RMSE of every method under every mask (pixels, over all hidden
+points of all clips).
 """
 
 from __future__ import annotations
 
-from collections.abc import Iterator
-from dataclasses import dataclass
 from pathlib import Path
 from typing import Annotated
 
-import numpy as np
 import pyarrow as pa
 import pyarrow.parquet as pq
 import typer
 from rich.console import Console
 from rich.table import Table
 
-from handdb.errors import InputError
-from handdb.gapfill import METHODS, THESIS
-from handdb.gapfill.evaluate import (
-    MASKS,
-    OCCLUSION_MASK,
-    RANDOM_MASK,
-    THESIS_MASK,
-    Evaluation,
-    evaluate_clip,
-    plot_errors,
+from handdb.gapfill import METHODS
+from handdb.gapfill.evaluate import MASKS, RANDOM_MASK, THESIS_MASK, pooled_rmse
+from handdb.gapfill.sources import (
+    ClipSource,
+    InboxSource,
+    SyntheticSource,
+    database_sources,
 )
-from handdb.readers.inbox import discover, load_clip
-from handdb.skeletons import Skeleton, load_skeleton
+from handdb.paths import default_db
+from handdb.readers.inbox import discover
+from handdb.store import Store
 
 app = typer.Typer(name="gapfill", no_args_is_help=True)
 out = Console()
 
 #: Masks used unless ``--mask`` says otherwise.
 DEFAULT_MASKS = (THESIS_MASK, RANDOM_MASK)
-#: Where results go unless ``--out`` says otherwise.
-DEFAULT_OUT = Path("gapfill-eval")
 
 
 @app.callback()
@@ -50,67 +45,45 @@ def gapfill() -> None:
     """Gap-filling evaluation."""
 
 
-@dataclass(frozen=True)
-class FullClip:
-    """A clip with complete 2D tracks (and its 3D joints when known)."""
-
-    clip_id: str
-    uv: np.ndarray
-    skeleton: Skeleton
-    xyz: np.ndarray | None
-
-
-def inbox_clips(inbox: Path) -> Iterator[FullClip]:
-    """Yield the inbox's clips whose tracks are complete; say why others are skipped."""
+def inbox_sources(inbox: Path) -> list[InboxSource]:
+    """List the inbox's clips; say which files the inbox refused."""
     scan = discover(inbox)
     for refused in scan.refused:
         out.print(f"[yellow]skipped: {refused}[/]")
-    for entry in scan.clips:
-        try:
-            clip = load_clip(entry)
-        except InputError as exc:
-            out.print(f"[yellow]skipped {entry.clip_id}: {exc}[/]")
-            continue
-        if not clip.observed.all():
-            out.print(f"[yellow]skipped {clip.clip_id}: its tracks have missing points, "
-                      "so hidden points could not be scored[/]")
-            continue
-        truth = clip.truth if clip.truth is not None and np.isfinite(clip.truth).all() else None
-        yield FullClip(clip.clip_id, clip.uv, clip.skeleton, truth)
+    return [InboxSource(entry) for entry in scan.clips]
 
 
-def synthetic_clips(motion: str, n_frames: int, seeds: int, skeleton: str) -> Iterator[FullClip]:
-    """Yield ``seeds`` synthesized clips of ``motion``."""
-    from handdb.synthetic.clips import synthesize_clip
-
-    for seed in range(seeds):
-        clip = synthesize_clip(motion, n_frames, skeleton=skeleton, seed=seed)
-        yield FullClip(f"{motion}-{seed}", clip.uv, load_skeleton(skeleton), clip.xyz)
-
-
-def rmse_table(evaluations: list[Evaluation], masks: list[str], methods: list[str]) -> Table:
-    """Tabulate the RMSE (pixels) per method and mask, pooled over the clips."""
+def rmse_table(rows: pa.Table, masks: list[str], methods: list[str]) -> Table:
+    """Tabulate the RMSE (pixels) per method and mask, pooled over the clips' rows."""
+    rmse = pooled_rmse(rows)
     table = Table(title="gap filling: RMSE over hidden points, pixels")
     table.add_column("method")
     table.add_column("family")
     for mask in masks:
         table.add_column(mask, justify="right")
     for method in methods:
-        cells = []
-        for mask in masks:
-            squared = np.concatenate([
-                e.errors[(mask, method)][e.hidden[mask]] ** 2 for e in evaluations
-                if (mask, method) in e.errors])
-            cells.append(f"{np.sqrt(np.nanmean(squared)):.2f}" if squared.size else "-")
+        cells = [f"{rmse[(mask, method)]:.2f}" if (mask, method) in rmse else "-"
+                 for mask in masks]
         table.add_row(method, METHODS[method].family, *cells)
     return table
 
 
+def _write_folder(folder: Path, rows: pa.Table, charts: dict[str, str], store: Store) -> None:
+    folder.mkdir(parents=True, exist_ok=True)
+    pq.write_table(rows, folder / "gapfill_eval.parquet")
+    for clip_id, chart in charts.items():
+        store.fs.get(chart, str(folder / f"{clip_id}_gapfill.png"))
+
+
 def gapfill_eval(
+    db: Annotated[str, typer.Option("--db", envvar="HANDDB_DB", help=(
+        "Database the rows and charts go to; its clips with complete tracks are scored "
+        "unless --inbox or --synthetic is given."))] = default_db(),
     inbox: Annotated[Path | None, typer.Option(
-        help="Inbox of clips with complete tracks.")] = None,
+        help="Score the clips of this inbox with complete tracks instead.")] = None,
     synthetic: Annotated[str | None, typer.Option(
-        help="Synthesize clips of this motion (rapid, clench, wave, random).")] = None,
+        help="Score synthesized clips of this motion (rapid, clench, wave, random) instead.")
+    ] = None,
     frames: Annotated[int, typer.Option(help="Frames of each synthetic clip.")] = 400,
     seeds: Annotated[int, typer.Option(help="Number of synthetic clips.")] = 2,
     skeleton: Annotated[str, typer.Option(help="Skeleton of the synthetic clips.")] = "mediapipe21",
@@ -119,37 +92,42 @@ def gapfill_eval(
     method: Annotated[list[str] | None, typer.Option(
         help="Method, repeatable (default: every method).")] = None,
     seed: Annotated[int, typer.Option(help="Seed of the random-gaps mask.")] = 0,
-    out_dir: Annotated[Path, typer.Option(
-        "--out", help="Folder for gapfill_eval.parquet and the charts.")] = DEFAULT_OUT,
+    out_dir: Annotated[Path | None, typer.Option(
+        "--out", help="Also write gapfill_eval.parquet and the charts to this folder.")] = None,
 ) -> None:
     """Hide known points of full tracks, fill them with every method, print the RMSE."""
+    from flows import gapfill_eval as eval_flow
+    from flows.settings import quick_flows
+
     methods = list(method or METHODS)
-    mask = list(mask or DEFAULT_MASKS)
-    unknown = sorted(set(methods) - set(METHODS)) + sorted(set(mask) - set(MASKS))
+    masks = list(mask or DEFAULT_MASKS)
+    unknown = sorted(set(methods) - set(METHODS)) + sorted(set(masks) - set(MASKS))
     if unknown:
         raise typer.BadParameter(f"unknown method or mask: {', '.join(unknown)}")
-    if (inbox is None) == (synthetic is None):
-        raise typer.BadParameter("give exactly one of --inbox and --synthetic")
-    clips = inbox_clips(inbox) if inbox is not None else synthetic_clips(
-        synthetic, frames, seeds, skeleton)
-    out_dir.mkdir(parents=True, exist_ok=True)
-    evaluations, parts = [], []
-    for clip in clips:
-        masks = [m for m in mask if m != OCCLUSION_MASK or clip.xyz is not None]
-        evaluation = evaluate_clip(clip.clip_id, clip.uv, clip.skeleton, masks=masks,
-                                   methods=methods, xyz=clip.xyz, seed=seed)
-        evaluations.append(evaluation)
-        parts.append(evaluation.table)
-        shown = [m for m in methods if METHODS[m].family == THESIS] + ["auto"]
-        for name in masks:
-            plot_errors(evaluation, name, clip.skeleton, out_dir / f"{clip.clip_id}_{name}.png",
-                        methods=[m for m in shown if m in methods])
-    if not evaluations:
+    if inbox is not None and synthetic is not None:
+        raise typer.BadParameter("give at most one of --inbox and --synthetic")
+    sources: list[ClipSource]
+    if synthetic is not None:
+        sources = [SyntheticSource(synthetic, frames, s, skeleton) for s in range(seeds)]
+    elif inbox is not None:
+        sources = list(inbox_sources(inbox))
+    else:
+        sources = list(database_sources(db))
+    if not sources:
         out.print("[red]no clip with complete tracks to evaluate[/]")
         raise typer.Exit(1)
-    pq.write_table(pa.concat_tables(parts), out_dir / "gapfill_eval.parquet")
-    out.print(rmse_table(evaluations, mask, methods))
-    out.print(f"wrote {out_dir / 'gapfill_eval.parquet'} and {len(evaluations)} clip chart(s)")
+    with quick_flows():
+        summary = eval_flow.gapfill_eval(sources, db, masks, methods, seed)
+    for clip_id in summary.skipped:
+        out.print(f"[yellow]skipped {clip_id}: its tracks have missing points (or its files "
+                  "were refused), so hidden points could not be scored[/]")
+    if not summary.charts:
+        out.print("[red]no clip with complete tracks to evaluate[/]")
+        raise typer.Exit(1)
+    if out_dir is not None:
+        _write_folder(out_dir, summary.table, summary.charts, Store(db))
+    out.print(rmse_table(summary.table, masks, methods))
+    out.print(f"wrote table gapfill_eval and {len(summary.charts)} chart(s) to {db}")
 
 
 app.command("gapfill-eval")(gapfill_eval)

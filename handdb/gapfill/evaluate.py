@@ -10,7 +10,8 @@ Masks (see :mod:`handdb.gapfill.masks` and :mod:`handdb.gapfill.occlusion`):
 
 :func:`evaluate_clip` returns the ``gapfill_eval`` rows (one per mask, method and joint,
 errors in pixels) and the per-point errors; :func:`plot_errors` draws them like the
-thesis's Figure 4.6.
+thesis's Figure 4.6 (:func:`plot_masks`, every mask of a clip in one chart);
+:func:`pooled_rmse` and :func:`rmse_markdown` summarise rows of many clips.
 """
 
 from __future__ import annotations
@@ -18,9 +19,11 @@ from __future__ import annotations
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
+from typing import BinaryIO
 
 import numpy as np
 import pyarrow as pa
+from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
 from handdb import tables
@@ -174,6 +177,66 @@ def overall_rmse(evaluation: Evaluation) -> dict[tuple[str, str], float]:
     }
 
 
+def pooled_rmse(table: pa.Table) -> dict[tuple[str, str], float]:
+    """RMSE over every filled hidden point, pixels, per ``(mask, method)``, from the rows.
+
+    Pools the per-joint rows of ``gapfill_eval`` (of one clip or many) by their
+    ``n_filled``; NaN where nothing was filled.
+    """
+    rows = table.to_pydict()
+    squares: dict[tuple[str, str], list[float]] = {}
+    for mask, method, n, rmse in zip(rows["mask"], rows["method"], rows["n_filled"],
+                                     rows["rmse"], strict=True):
+        total = squares.setdefault((mask, method), [0.0, 0.0])
+        if n:
+            total[0] += n * rmse**2
+            total[1] += n
+    return {key: float(np.sqrt(s / n)) if n else float("nan") for key, (s, n) in squares.items()}
+
+
+def rmse_markdown(table: pa.Table) -> str:
+    """Tabulate :func:`pooled_rmse` in markdown: a row per method, a column per mask."""
+    rmse = pooled_rmse(table)
+    masks = list(dict.fromkeys(mask for mask, _ in rmse))
+    methods = list(dict.fromkeys(method for _, method in rmse))
+    lines = ["| method | family | " + " | ".join(masks) + " |",
+             "|---|---|" + "---:|" * len(masks)]
+    for method in methods:
+        cells = [f"{rmse[(mask, method)]:.2f}" if (mask, method) in rmse else "-"
+                 for mask in masks]
+        family = METHODS[method].family if method in METHODS else ""
+        lines.append(f"| {method} | {family} | " + " | ".join(cells) + " |")
+    return "\n".join(lines)
+
+
+def _draw_errors(
+    axes: Axes, evaluation: Evaluation, mask: str, skeleton: Skeleton,
+    methods: Sequence[str], title: str,
+) -> None:
+    """Draw one mask's per-frame errors of ``methods`` on ``axes`` (see :func:`plot_errors`)."""
+    hidden = evaluation.hidden[mask]
+    shown = np.flatnonzero(hidden.any(axis=0))
+    n_frames = hidden.shape[0]
+    x = np.arange(shown.size * n_frames)
+    for method in methods:
+        error = evaluation.errors[(mask, method)][:, shown].T.ravel()
+        axes.plot(x, np.nan_to_num(error), linewidth=0.9, label=method)
+    for k in range(1, shown.size):
+        axes.axvline(k * n_frames, color="0.85", linewidth=0.6, zorder=0)
+    axes.set_xticks((np.arange(shown.size) + 0.5) * n_frames,
+                    [skeleton.joints[j] for j in shown], rotation=60, fontsize=7)
+    axes.set_yscale("symlog", linthresh=1.0)
+    axes.set_ylim(bottom=0.0)
+    axes.set_ylabel("error, pixels (log above 1)")
+    axes.set_xlabel("frames of each joint with hidden points")
+    axes.set_title(title)
+    axes.legend(ncol=4, fontsize=7)
+
+
+def _methods_of(evaluation: Evaluation, mask: str, methods: Sequence[str] | None) -> list[str]:
+    return [m for (k, m) in evaluation.errors if k == mask] if methods is None else list(methods)
+
+
 def plot_errors(
     evaluation: Evaluation, mask: str, skeleton: Skeleton, path: str | Path,
     *, methods: Sequence[str] | None = None, title: str | None = None,
@@ -188,27 +251,30 @@ def plot_errors(
     pathlib.Path
         The PNG written.
     """
-    hidden = evaluation.hidden[mask]
-    shown = np.flatnonzero(hidden.any(axis=0))
-    n_frames = hidden.shape[0]
-    methods = [m for (k, m) in evaluation.errors if k == mask] if methods is None else methods
     figure = Figure(figsize=(12, 4.5))
-    axes = figure.subplots()
-    x = np.arange(shown.size * n_frames)
-    for method in methods:
-        error = evaluation.errors[(mask, method)][:, shown].T.ravel()
-        axes.plot(x, np.nan_to_num(error), linewidth=0.9, label=method)
-    for k in range(1, shown.size):
-        axes.axvline(k * n_frames, color="0.85", linewidth=0.6, zorder=0)
-    axes.set_xticks((np.arange(shown.size) + 0.5) * n_frames,
-                    [skeleton.joints[j] for j in shown], rotation=60, fontsize=7)
-    axes.set_yscale("symlog", linthresh=1.0)
-    axes.set_ylim(bottom=0.0)
-    axes.set_ylabel("error, pixels (log above 1)")
-    axes.set_xlabel("frames of each joint with hidden points")
-    axes.set_title(title or f"gap-filling error per frame, mask {mask}")
-    axes.legend(ncol=4, fontsize=7)
+    _draw_errors(figure.subplots(), evaluation, mask, skeleton,
+                 _methods_of(evaluation, mask, methods),
+                 title or f"gap-filling error per frame, mask {mask}")
     figure.tight_layout()
     path = Path(path)
     figure.savefig(path, dpi=120)
     return path
+
+
+def plot_masks(
+    evaluation: Evaluation, skeleton: Skeleton, target: str | Path | BinaryIO,
+    *, methods: Sequence[str] | None = None, title: str | None = None,
+) -> None:
+    """Draw :func:`plot_errors`'s chart for every mask of ``evaluation``, one panel each.
+
+    ``target`` is a path or a binary file the PNG is written to.
+    """
+    masks = list(evaluation.hidden)
+    figure = Figure(figsize=(12, 4.5 * len(masks)))
+    for axes, mask in zip(np.atleast_1d(figure.subplots(len(masks), 1)), masks, strict=True):
+        _draw_errors(axes, evaluation, mask, skeleton, _methods_of(evaluation, mask, methods),
+                     f"mask {mask}")
+    if title:
+        figure.suptitle(title)
+    figure.tight_layout()
+    figure.savefig(target, dpi=120, format="png")

@@ -6,32 +6,37 @@ from typer.testing import CliRunner
 from handdb.cli.gapfill import app
 from handdb.readers import tracks_csv, truth_csv
 from handdb.skeletons import load_skeleton
+from handdb.store import Store
 from handdb.synthetic.clips import synthesize_clip
 
 
-def test_gapfill_eval_on_synthetic_clips_prints_and_writes(tmp_path):
+def test_gapfill_eval_on_synthetic_clips_writes_the_database_and_a_folder(tmp_path):
+    db = str(tmp_path / "db")
     result = CliRunner().invoke(app, [
         "gapfill-eval", "--synthetic", "rapid", "--frames", "100", "--seeds", "1",
         "--mask", "thesis-table-4.2", "--method", "previous", "--method", "auto",
-        "--out", str(tmp_path),
+        "--db", db, "--out", str(tmp_path / "out"),
     ])
     assert result.exit_code == 0, result.output
     assert "previous" in result.output and "auto" in result.output
-    table = pq.read_table(tmp_path / "gapfill_eval.parquet")
-    assert set(table.column("method").to_pylist()) == {"previous", "auto"}
-    assert (tmp_path / "rapid-0_thesis-table-4.2.png").is_file()
+    rows = Store(db).read("gapfill_eval", "synthetic-rapid-seed0")
+    assert set(rows.column("method").to_pylist()) == {"previous", "auto"}
+    assert (tmp_path / "db" / "reports" / "synthetic-rapid-seed0" / "gapfill.png").is_file()
+    table = pq.read_table(tmp_path / "out" / "gapfill_eval.parquet")
+    assert table.equals(rows)
+    assert (tmp_path / "out" / "synthetic-rapid-seed0_gapfill.png").is_file()
 
 
 def test_gapfill_eval_refuses_an_unknown_method(tmp_path):
     result = CliRunner().invoke(app, [
-        "gapfill-eval", "--synthetic", "rapid", "--method", "magic", "--out", str(tmp_path)])
+        "gapfill-eval", "--synthetic", "rapid", "--method", "magic", "--db", str(tmp_path)])
     assert result.exit_code != 0
     assert "magic" in result.output
 
 
 def test_gapfill_eval_skips_an_inbox_without_complete_tracks(tmp_path):
     result = CliRunner().invoke(app, ["gapfill-eval", "--inbox", str(tmp_path),
-                                      "--out", str(tmp_path / "out")])
+                                      "--db", str(tmp_path / "db")])
     assert result.exit_code == 1
     assert "no clip with complete tracks" in result.output
 
@@ -46,10 +51,11 @@ def test_gapfill_eval_on_an_inbox_clip_with_truth(tmp_path):
         "units": "mm", "camera": {"model": "orthographic"}}))
     tracks_csv.write(inbox / "fist.tracks.csv", clip.uv, None, skeleton)
     truth_csv.write(inbox / "fist.truth.csv", clip.xyz, skeleton)
+    db = str(tmp_path / "db")
     result = CliRunner().invoke(app, [
         "gapfill-eval", "--inbox", str(inbox), "--mask", "occlusion", "--mask", "random-gaps",
-        "--method", "linear", "--method", "auto", "--out", str(tmp_path / "out")])
+        "--method", "linear", "--method", "auto", "--db", db])
     assert result.exit_code == 0, result.output
-    table = pq.read_table(tmp_path / "out" / "gapfill_eval.parquet")
+    table = Store(db).read_table("gapfill_eval")
     assert set(table.column("mask").to_pylist()) == {"occlusion", "random-gaps"}
     assert set(table.column("clip_id").to_pylist()) == {"fist"}

@@ -33,3 +33,26 @@ def dhg_xyz():
     if not path.is_file():
         pytest.skip(f"real capture not available at {DHG_DIR}")
     return np.loadtxt(path).reshape(-1, 22, 3) * MM_PER_M
+
+
+#: Demo clips put in the test database: one with complete tracks, one with gaps.
+DEMO_DB_CLIPS = ("rapid-s01", "wave-s02")
+
+
+@pytest.fixture(scope="session")
+def demo_db(tmp_path_factory):
+    """A database holding two demo clips, built by the pipeline's own stages (no flow)."""
+    from handdb import pipeline
+    from handdb.demo import write_demo_inbox
+    from handdb.readers import discover
+    from handdb.store import Store
+
+    root = tmp_path_factory.mktemp("gapfill-db")
+    inbox = root / "inbox"
+    write_demo_inbox(inbox)
+    store = Store(str(root / "db"))
+    for entry in discover(inbox).clips:
+        if entry.clip_id in DEMO_DB_CLIPS:
+            result = pipeline.fill(pipeline.ingest(entry, "test"), pipeline.BuildOptions())
+            store.commit_clip(entry.clip_id, pipeline.clip_tables(result, inbox))
+    return store.url
