@@ -360,7 +360,7 @@ def query_latencies(db: Path) -> dict[str, float]:
         best = float("inf")
         for _ in range(QUERY_REPEATS):
             start = time.perf_counter()
-            con.execute(sql).to_arrow_table()
+            con.sql(sql).to_arrow_table()
             best = min(best, time.perf_counter() - start)
         latencies[name] = best
     return latencies
@@ -393,7 +393,8 @@ def print_stage_table(timings: dict[str, Timing]) -> None:
               f"{timing.frames_per_second:>12,.0f}{timing.frames_per_cpu_second:>14,.0f}")
 
 
-def run_builds(sizes: tuple[tuple[int, int], ...], scratch: Path, startup: float) -> list[dict]:
+def run_builds(sizes: tuple[tuple[int, int], ...], scratch: Path,
+               startup: dict[str, float]) -> list[dict]:
     """Build an inbox of every size; time it against the I/O floor."""
     rows = []
     for n_clips, n_frames in sizes:
@@ -401,15 +402,18 @@ def run_builds(sizes: tuple[tuple[int, int], ...], scratch: Path, startup: float
         frames = write_inbox(inbox, n_clips, n_frames)
         floor = io_floor(inbox, scratch / f"floor-{n_clips}x{n_frames}")
         figures = build(inbox, db)
-        beyond = figures["process_seconds"] - startup
+        beyond = figures["process_seconds"] - startup["process_seconds"]
+        beyond_cpu = figures["cpu_seconds"] - startup["cpu_seconds"]
         rows.append(figures | {"n_clips": n_clips, "n_frames": n_frames, "frames": frames,
-                               "floor_seconds": floor.wall, "beyond_startup": beyond,
+                               "floor_seconds": floor.wall, "floor_cpu_seconds": floor.cpu,
+                               "beyond_startup": beyond, "beyond_startup_cpu": beyond_cpu,
                                "floor_ratio": beyond / floor.wall,
+                               "floor_ratio_cpu": beyond_cpu / floor.cpu,
                                "build_frames_per_second": frames / beyond})
         shutil.rmtree(db)
         print(f"{n_clips:>6}{n_frames:>8}{frames:>10}{figures['process_seconds']:>9.1f}"
               f"{figures['cpu_seconds']:>8.1f}{beyond:>9.1f}{floor.wall:>8.2f}"
-              f"{beyond / floor.wall:>8.1f}"
+              f"{beyond / floor.wall:>8.1f}{beyond_cpu / floor.cpu:>10.1f}"
               f"{frames / beyond:>10,.0f}{figures['maxrss_mb']:>9.0f}{figures['load']:>6.1f}",
               flush=True)
     return rows
@@ -426,12 +430,12 @@ def main(plan: Plan, out: Path) -> dict:
         empty.mkdir()
         build(empty, scratch / "warm-up-db")
         startups = [build(empty, scratch / f"empty-db-{i}") for i in range(3)]
-        startup = min(s["process_seconds"] for s in startups)
-        results["startup"] = {"process_seconds": startup,
-                              "import_seconds": min(s["import_seconds"] for s in startups),
-                              "flow_seconds": min(s["flow_seconds"] for s in startups),
-                              "maxrss_mb": min(s["maxrss_mb"] for s in startups)}
-        print(f"start-up (empty build in a fresh process): {startup:.1f} s "
+        startup = {name: min(s[name] for s in startups) for name in
+                   ("process_seconds", "cpu_seconds", "import_seconds", "flow_seconds",
+                    "maxrss_mb")}
+        results["startup"] = startup
+        print(f"start-up (empty build in a fresh process): {startup['process_seconds']:.1f} s, "
+              f"{startup['cpu_seconds']:.1f} s CPU "
               f"(imports {results['startup']['import_seconds']:.1f} s), "
               f"{results['startup']['maxrss_mb']:.0f} MB")
 
@@ -449,7 +453,7 @@ def main(plan: Plan, out: Path) -> dict:
 
         print(f"\nwhole builds in a fresh process; 'beyond' is the build's time less start-up\n"
               f"{'clips':>6}{'frames':>8}{'total':>10}{'build s':>9}{'cpu s':>8}{'beyond':>9}"
-              f"{'floor':>8}{'ratio':>8}{'frames/s':>10}{'RSS MB':>9}{'load':>6}")
+              f"{'floor':>8}{'ratio':>8}{'cpu ratio':>10}{'frames/s':>10}{'RSS MB':>9}{'load':>6}")
         results["by_clips"] = run_builds(plan.by_clips, scratch, startup)
         results["by_frames"] = run_builds(plan.by_frames, scratch, startup)
         results["growth"] = {
