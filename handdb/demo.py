@@ -1,5 +1,7 @@
-"""The demo inbox: synthetic clips with exact ground truth in every input format, the
-thesis's clenching-hand experiment, and the X-ray table of Chaudhry et al.
+"""The demo inbox: synthetic clips, the thesis's experiment and the paper's X-ray table.
+
+Synthetic clips with exact ground truth come in every input format, beside the thesis's
+clenching-hand experiment and the X-ray table of Chaudhry et al.
 
 Every clip comes from the procedural hand of :mod:`handdb.synthetic`, so the demo
 database can be validated against truth. Some clips have occluded and low-confidence

@@ -6,7 +6,8 @@ import os
 from pathlib import Path
 
 #: The repository's ``schemas/`` folder: skeleton topologies, table schemas, SQL views.
-SCHEMAS_DIR = Path(os.environ.get("HANDDB_SCHEMAS", Path(__file__).resolve().parents[1] / "schemas"))
+SCHEMAS_DIR = Path(
+    os.environ.get("HANDDB_SCHEMAS", Path(__file__).resolve().parents[1] / "schemas"))
 
 #: Default inbox of raw inputs, overridable by ``HANDDB_INBOX`` or ``--inbox``.
 DEFAULT_INBOX = "./data/inbox"

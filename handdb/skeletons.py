@@ -131,7 +131,8 @@ def _parse(doc: dict, source: Path) -> Skeleton:
         fingers = [j["finger"] for j in joints]
         roles = [j["role"] for j in joints]
     except (KeyError, TypeError) as exc:
-        raise SkeletonError(f"{source}: every joint needs name, parent, finger, role ({exc})")
+        raise SkeletonError(
+            f"{source}: every joint needs name, parent, finger, role ({exc})") from None
     if len(set(names)) != len(names):
         raise SkeletonError(f"{source}: joint names must be unique")
     parents = np.full(len(names), -1, dtype=np.int64)

@@ -55,7 +55,7 @@ def _write_clip(inbox: Path, clip_id: str, *, seed: int, fmt: str = "tracks_csv"
     return track
 
 
-@pytest.fixture
+@pytest.fixture(scope="session")
 def write_clip():
     """``write_clip(inbox, clip_id, seed=, fmt=, truth=)`` writes a short synthetic clip."""
     return _write_clip

@@ -87,7 +87,8 @@ def test_convert_between_presets_by_name():
     as_thesis = convert_points(points, mp, th)
     assert as_thesis.shape == (5, 21, 3)
     assert np.isnan(as_thesis[:, th.index("palm_fold")]).all()
-    np.testing.assert_array_equal(as_thesis[:, th.index("ring_dip")], points[:, mp.index("ring_dip")])
+    np.testing.assert_array_equal(as_thesis[:, th.index("ring_dip")],
+                                  points[:, mp.index("ring_dip")])
     back = convert_points(convert_points(points, mp, dhg), dhg, mp)
     np.testing.assert_array_equal(back, points)
     src, dst = correspondence(mp, th)

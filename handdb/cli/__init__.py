@@ -10,15 +10,16 @@ from __future__ import annotations
 import csv
 import json
 import sys
-from enum import Enum
+from enum import StrEnum
 from pathlib import Path
+from typing import Annotated
 
 import typer
 from rich.console import Console
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 from rich.table import Table
 
-from handdb.errors import HanddbError
+from handdb.errors import HanddbError, InputError
 from handdb.paths import DEFAULT_DB, DEFAULT_INBOX
 
 app = typer.Typer(
@@ -32,10 +33,10 @@ app = typer.Typer(
 console = Console(stderr=True)
 out = Console()
 
-InboxOption = typer.Option(DEFAULT_INBOX, "--inbox", envvar="HANDDB_INBOX",
-                           help="Folder of raw inputs (clips, sidecars, X-ray CSVs).")
-DbOption = typer.Option(DEFAULT_DB, "--db", envvar="HANDDB_DB",
-                        help="Database folder or fsspec URL (e.g. s3://bucket/db).")
+Inbox = Annotated[str, typer.Option("--inbox", envvar="HANDDB_INBOX",
+                                     help="Folder of raw inputs (clips, sidecars, X-ray CSVs).")]
+Db = Annotated[str, typer.Option("--db", envvar="HANDDB_DB",
+                                 help="Database folder or fsspec URL (e.g. s3://bucket/db).")]
 
 #: Exit status when some inputs were quarantined but every other clip went through.
 EXIT_QUARANTINED = 3
@@ -43,7 +44,7 @@ EXIT_QUARANTINED = 3
 EXIT_FAILED = 1
 
 
-class OutputFormat(str, Enum):
+class OutputFormat(StrEnum):
     """How ``handdb sql`` prints its result."""
 
     table = "table"
@@ -59,9 +60,11 @@ class ClipProgress:
         self._task = progress.add_task("clips", total=None)
 
     def expect(self, n_clips: int) -> None:
+        """Size the bar to ``n_clips``."""
         self._progress.update(self._task, total=n_clips)
 
     def advance(self, clip_id: str, stage: str) -> None:
+        """Move the bar when a clip is done, however it ended."""
         if stage in ("commit", "unchanged", "refused", "failed"):
             self._progress.update(self._task, advance=1, description=f"{stage} {clip_id}")
 
@@ -69,7 +72,19 @@ class ClipProgress:
 def run_build(inbox: str, db: str, *, gap_fill: str | None = None, lift: str | None = None,
               export_usd: bool = True, workers: int = 4, runner: str = "thread",
               dask_address: str | None = None, quiet: bool = False):
-    """Run the build flow with a progress bar; return its summary."""
+    """Run the build flow with a progress bar; return its summary.
+
+    The inbox and the database lock are checked before Prefect starts, so a missing inbox
+    or a build already running is reported at once.
+    """
+    from handdb.store import Store
+
+    if not Path(inbox).is_dir():
+        raise InputError(inbox, "is not a folder: create it and put clips in it, or pass "
+                         "--inbox (or set HANDDB_INBOX)", field="inbox")
+    with Store(db).lock():
+        pass
+
     from flows.build import run
     from flows.settings import quick_flows
     from handdb import progress as build_progress
@@ -101,17 +116,21 @@ def print_summary(summary) -> None:
 
 @app.command()
 def build(
-    inbox: str = InboxOption,
-    db: str = DbOption,
-    gap_fill: str = typer.Option(None, help="Gap-filling method for every clip "
-                                 "(default: each clip's sidecar, else the best method)."),
-    lift: str = typer.Option(None, help="Lifting method for every clip (default: each "
-                             "clip's sidecar, else the best method)."),
-    usd: bool = typer.Option(True, help="Export every clip as USD."),
-    workers: int = typer.Option(4, min=1, help="Clips processed in parallel."),
-    runner: str = typer.Option("thread", help="Task runner: thread, or dask (a local "
-                               "cluster unless --dask-address is given)."),
-    dask_address: str = typer.Option(None, help="Address of an existing Dask scheduler."),
+    inbox: Inbox = DEFAULT_INBOX,
+    db: Db = DEFAULT_DB,
+    gap_fill: Annotated[str | None, typer.Option(
+        help="Gap-filling method for every clip (default: each clip's sidecar, else the "
+        "best method).")] = None,
+    lift: Annotated[str | None, typer.Option(
+        help="Lifting method for every clip (default: each clip's sidecar, else the best "
+        "method).")] = None,
+    usd: Annotated[bool, typer.Option(help="Export every clip as USD.")] = True,
+    workers: Annotated[int, typer.Option(min=1, help="Clips processed in parallel.")] = 4,
+    runner: Annotated[str, typer.Option(
+        help="Task runner: thread, or dask (a local cluster unless --dask-address is "
+        "given).")] = "thread",
+    dask_address: Annotated[str | None, typer.Option(
+        help="Address of an existing Dask scheduler.")] = None,
 ) -> None:
     """Ingest new or changed clips from the inbox and run every stage on them.
 
@@ -133,10 +152,11 @@ def build(
 
 @app.command()
 def sql(
-    statement: str = typer.Argument(..., help="SQL; every table is a view of its name."),
-    db: str = DbOption,
-    format: OutputFormat = typer.Option(OutputFormat.table, "--format", "-f",
-                                        help="table, csv (a header line, then rows) or json."),
+    statement: Annotated[str, typer.Argument(help="SQL; every table is a view of its name.")],
+    db: Db = DEFAULT_DB,
+    format: Annotated[OutputFormat, typer.Option(
+        "--format", "-f", help="table, csv (a header line, then rows) or json.")
+    ] = OutputFormat.table,
 ) -> None:
     """Run a SQL query against the database with DuckDB and print the result."""
     import duckdb
@@ -166,10 +186,12 @@ def sql(
 
 @app.command()
 def serve(
-    inbox: str = InboxOption,
-    db: str = DbOption,
-    cron: str = typer.Option(None, help="Cron schedule, e.g. '*/15 * * * *'."),
-    interval: float = typer.Option(None, min=1, help="Seconds between builds."),
+    inbox: Inbox = DEFAULT_INBOX,
+    db: Db = DEFAULT_DB,
+    cron: Annotated[str | None, typer.Option(
+        help="Cron schedule, e.g. '*/15 * * * *'.")] = None,
+    interval: Annotated[float | None, typer.Option(
+        min=1, help="Seconds between builds.")] = None,
 ) -> None:
     """Run the build on a schedule as a Prefect deployment.
 
@@ -185,13 +207,17 @@ def serve(
 
 
 @app.command()
-def demo(inbox: str = InboxOption, db: str = DbOption) -> None:
+def demo(inbox: Inbox = DEFAULT_INBOX, db: Db = DEFAULT_DB) -> None:
     """Generate sample inputs, build the demo database and print what it holds."""
     from handdb.demo import describe_database, write_demo_inbox
 
     written = write_demo_inbox(Path(inbox))
     console.print(f"wrote {len(written)} sample inputs to {inbox}")
-    summary = run_build(inbox, db)
+    try:
+        summary = run_build(inbox, db)
+    except HanddbError as exc:
+        console.print(f"[red]error:[/] {exc}")
+        raise typer.Exit(EXIT_FAILED) from None
     print_summary(summary)
     out.print(describe_database(db))
     if summary.failed:
