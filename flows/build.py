@@ -30,6 +30,7 @@ from threadpoolctl import threadpool_limits
 
 from handdb import __version__, pipeline, progress, tables
 from handdb.quarantine import Refusal, quarantine_table
+from handdb.ratios import ratios_markdown
 from handdb.readers import InboxScan, content_hash, discover
 from handdb.store import Store
 from handdb.validation import clip_summary
@@ -87,8 +88,12 @@ def scan_inbox(inbox: str) -> InboxScan:
 
 @task(name="xray-ratios", cache_policy=NO_CACHE, **IO_RETRIES)
 def xray_ratios(paths: list[Path], db: str) -> tuple[pa.Table, list[Refusal]]:
-    """Store the inbox's X-ray measurements and recompute the joint ratios."""
-    return pipeline.ingest_xray(paths, Store(db))
+    """Store the inbox's X-ray measurements, recompute the joint ratios, publish them."""
+    ratios, refusals = pipeline.ingest_xray(paths, Store(db))
+    if ratios.num_rows:
+        create_markdown_artifact(markdown=ratios_markdown(ratios), key="joint-ratios",
+                                 description="joint ratios from X-ray measurements")
+    return ratios, refusals
 
 
 Outcome = pipeline.ClipResult | Refusal

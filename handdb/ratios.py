@@ -359,3 +359,27 @@ def paper_discrepancies(measurements: pa.Table | None = None) -> tuple[Discrepan
             explanation="Table 1's value; the text's 169.97 gives J1 ratio 0.4865, "
                         "Table 1's gives 0.4867, and both leave the mean at 0.4846"),
     )
+
+
+def ratios_markdown(ratios: pa.Table, cohort: str = ALL_COHORT) -> str:
+    """A markdown report of the joint ratios of ``cohort`` and the paper's discrepancies.
+
+    Parameters
+    ----------
+    ratios
+        Table ``joint_ratios``.
+    cohort
+        The cohort to tabulate.
+    """
+    rows = ratios.filter(pc.equal(ratios.column("cohort"), cohort)).to_pylist()
+    lines = [f"## Joint ratios (cohort {cohort})", "",
+             "| finger | segment | n | mean | min | max | range | 95 % CI |",
+             "|---|---|---:|---:|---:|---:|---:|---|"]
+    for r in rows:
+        interval = ("" if r["ci_low"] is None
+                    else f"{r['ci_low']:.4f} - {r['ci_high']:.4f}")
+        lines.append(f"| {r['finger']} | {r['segment']} | {r['n']} | {r['mean']:.4f} | "
+                     f"{r['min']:.4f} | {r['max']:.4f} | {r['range']:.4f} | {interval} |")
+    lines += ["", "Where Chaudhry et al. contradict their own Table 1:", ""]
+    lines += [f"- {d}" for d in paper_discrepancies()]
+    return "\n".join(lines) + "\n"
