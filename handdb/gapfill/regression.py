@@ -80,8 +80,8 @@ def _training_frames(samples: _Samples, gaps: Gaps, needed: np.ndarray) -> np.nd
     """Find the frames within :data:`WINDOW` of each gap where its ``needed`` columns are seen.
 
     ``needed`` ``(G, C) bool`` marks the columns that must be observed in a training frame.
-    Returns ``(G, F) int64`` rows of ``samples.values``: the window's frames, with the
-    "no sample" row ``T`` where a frame does not train (or pads the window).
+    Returns ``(G, F) int64`` rows of ``samples.values``: each gap's training frames, first,
+    then the "no sample" row ``T`` up to the width ``F`` of the widest training set.
     """
     n_frames = gaps.n_frames
     low = np.maximum(gaps.start - WINDOW, 0)
@@ -90,7 +90,8 @@ def _training_frames(samples: _Samples, gaps: Gaps, needed: np.ndarray) -> np.nd
     inside = window < high[:, None]
     window = np.minimum(window, n_frames - 1)
     train = inside & ((samples.missing_bits[window] & _bit_sets(needed)[:, None]) == 0)
-    return np.where(train, window, n_frames)
+    rows = np.sort(np.where(train, window, n_frames), axis=1)
+    return rows[:, :max(int(train.sum(axis=1).max()), 1)]
 
 
 def _predict_gaps(

@@ -36,14 +36,25 @@ def palm_joints(skeleton: Skeleton) -> np.ndarray:
     return np.isin(roles, list(PALM_ROLES)) & ~((fingers == "thumb") & (roles == "mcp"))
 
 
+def _carriers_of(basis: np.ndarray, joint: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Each point's carrier joints: ``(N, K) int64`` indices and ``(N, K) bool`` validity.
+
+    ``basis`` is ``(J, J) bool`` (row ``j``: the joints that carry joint ``j``); ``K`` is the
+    most carriers any of the points has, rows with fewer are padded with invalid entries.
+    """
+    rows = basis[joint] & (np.arange(basis.shape[1]) != joint[:, None])
+    width = max(int(rows.sum(axis=1).max(initial=0)), 1)
+    carriers = np.argsort(~rows, axis=1, kind="stable")[:, :width]
+    return carriers, np.take_along_axis(rows, carriers, axis=1)
+
+
 def _carry(
     uv: np.ndarray, missing: np.ndarray, reference: np.ndarray, frame: np.ndarray,
     joint: np.ndarray, basis: np.ndarray, affine: bool,
 ) -> np.ndarray:
-    carriers = np.flatnonzero(basis.any(axis=0))
+    carriers, valid = _carriers_of(basis, joint)
     before, now = reference[:, None], frame[:, None]
-    weights = (basis[joint][:, carriers] & ~missing[before, carriers]
-               & ~missing[now, carriers] & (carriers[None, :] != joint[:, None]))
+    weights = valid & ~missing[before, carriers] & ~missing[now, carriers]
     query = uv[reference, joint]
     mapped, ok = map_points(uv[before, carriers], uv[now, carriers], weights, query,
                             affine=affine)

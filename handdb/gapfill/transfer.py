@@ -24,7 +24,7 @@ NO_MAP, TRANSLATION, SIMILARITY, AFFINE = 0, 1, 2, 3
 def apply_linear(linear: np.ndarray, points: np.ndarray) -> np.ndarray:
     """Apply ``(N, 2, 2)`` linear maps to ``(N, 2)`` or ``(N, K, 2)`` points, one map each."""
     if points.ndim == 2:
-        return (linear @ points[..., None])[..., 0]
+        return np.einsum("nij,nj->ni", linear, points)
     return points @ np.swapaxes(linear, 1, 2)
 
 
@@ -35,9 +35,14 @@ def inverse_2x2(matrices: np.ndarray) -> np.ndarray:
     return adjugate / (a * d - b * c)[..., None, None]
 
 
-def _weighted_mean(points: np.ndarray, weights: np.ndarray, count: np.ndarray) -> np.ndarray:
-    total = (weights[:, None, :] @ np.nan_to_num(points))[:, 0]
-    return total / np.maximum(count, 1)[:, None]
+def _centred(points: np.ndarray, weights: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Return the weighted mean ``(N, 2)`` of ``(N, K, 2)`` points and the points about it.
+
+    ``weights`` is ``(N, K)``, 0 or 1; centred points are 0 where their weight is 0.
+    """
+    clean = np.nan_to_num(points)
+    mean = np.einsum("nk,nkd->nd", weights, clean) / np.maximum(weights.sum(axis=1), 1)[:, None]
+    return mean, (clean - mean[:, None]) * weights[..., None]
 
 
 def _well_spread(covariance: np.ndarray) -> np.ndarray:
@@ -79,10 +84,8 @@ def fit_maps(
     """
     w = weights.astype(np.float64)
     count = weights.sum(axis=1)
-    src_mean = _weighted_mean(source, w, count)
-    dst_mean = _weighted_mean(target, w, count)
-    src = np.where(weights[..., None], source - src_mean[:, None], 0.0)
-    dst = np.where(weights[..., None], target - dst_mean[:, None], 0.0)
+    src_mean, src = _centred(source, w)
+    dst_mean, dst = _centred(target, w)
     src_cov = np.swapaxes(src, 1, 2) @ src
     cross = np.swapaxes(dst, 1, 2) @ src
 
