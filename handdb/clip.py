@@ -6,8 +6,8 @@ The sidecar says how to read the clip's track file and what the numbers mean::
      "units": "mm", "camera": {"model": "orthographic"}}
 
 ``camera`` may instead be ``{"model": "pinhole", "fx": .., "fy": .., "cx": .., "cy": ..}``
-(pixels). Optional keys: ``bone_lengths`` (child joint -> length in ``units``),
-``min_confidence`` (default 0.5), ``joint_map`` (tool names -> canonical names),
+(pixels); a clip whose data file is already 3D (markers) needs no camera. Optional keys:
+``bone_lengths`` (child joint -> length in ``units``), ``min_confidence`` (default 0.5), ``joint_map`` (tool names -> canonical names),
 ``image`` (``{"width": W, "height": H}``, pixels; needed for normalised coordinates),
 ``gap_fill`` and ``lift`` (``{"method": NAME, ...parameters}``).
 """
@@ -37,6 +37,8 @@ DEFAULT_MIN_CONFIDENCE = 0.5
 
 HANDS = ("left", "right")
 CAMERA_MODELS = ("orthographic", "pinhole")
+#: The camera model of clips whose data is already 3D (marker clips).
+NO_CAMERA = "none"
 PINHOLE_KEYS = ("fx", "fy", "cx", "cy")
 KNOWN_KEYS = frozenset({
     "skeleton", "hand", "fps", "subject", "units", "camera", "bone_lengths",
@@ -61,7 +63,8 @@ class Camera:
     """The camera a clip's 2D tracks were seen through.
 
     ``model`` is ``"orthographic"`` (scaled orthographic, scale unknown) or ``"pinhole"``
-    with focal lengths ``fx, fy`` and principal point ``cx, cy`` in pixels.
+    with focal lengths ``fx, fy`` and principal point ``cx, cy`` in pixels; ``"none"`` for
+    clips whose data is already 3D.
     """
 
     model: str = "orthographic"
@@ -139,8 +142,12 @@ def _mapping(doc: dict, key: str, path: str) -> dict:
     return value
 
 
-def parse_sidecar(path: str | Path, clip_id: str | None = None) -> ClipSpec:
+def parse_sidecar(path: str | Path, clip_id: str | None = None, *,
+                  three_d: bool = False) -> ClipSpec:
     """Read and validate a ``<clip_id>.clip.json`` sidecar.
+
+    ``three_d`` says the clip's data file is already 3D (markers): ``camera`` is then
+    optional.
 
     Raises
     ------
@@ -169,7 +176,8 @@ def parse_sidecar(path: str | Path, clip_id: str | None = None) -> ClipSpec:
     if unknown:
         raise InputError(path, f"unknown key (known: {', '.join(sorted(KNOWN_KEYS))})",
                          field=unknown[0])
-    for key in ("skeleton", "hand", "fps", "subject", "units", "camera"):
+    required = ("skeleton", "hand", "fps", "subject", "units") + (() if three_d else ("camera",))
+    for key in required:
         if key not in doc:
             raise InputError(path, "is required", field=key)
     skeleton_name = _string(doc, "skeleton", path)
@@ -227,7 +235,7 @@ def parse_sidecar(path: str | Path, clip_id: str | None = None) -> ClipSpec:
         fps=_number(doc, "fps", path),
         subject=_string(doc, "subject", path),
         units=units,
-        camera=_camera(doc["camera"], path),
+        camera=_camera(doc["camera"], path) if "camera" in doc else Camera(model=NO_CAMERA),
         bone_lengths=bone_lengths,
         min_confidence=min_conf,
         joint_map={str(k): str(v) for k, v in joint_map.items()},
@@ -256,6 +264,9 @@ class Clip:
     truth
         ``(T, J, 3) float64`` in ``spec.units``, camera frame; NaN where absent; ``None``
         for clips without ground truth.
+    markers
+        ``(T, J, 3) float64`` 3D marker positions in ``spec.units``, NaN where a marker is
+        missing, for clips whose data file is 3D (``uv`` is then all NaN); else ``None``.
     source_format
         Name of the reader that read the tracks (``tracks_csv``, ``openpose``, ...).
     source_files
@@ -272,6 +283,7 @@ class Clip:
     source_format: str
     source_files: tuple[str, ...]
     content_hash: str
+    markers: np.ndarray | None = None
 
     @property
     def clip_id(self) -> str:
@@ -285,7 +297,12 @@ class Clip:
 
     @property
     def observed(self) -> np.ndarray:
-        """``(T, J) bool``: the point is present and not below ``min_confidence``."""
+        """``(T, J) bool``: the point is present and not below ``min_confidence``.
+
+        For marker clips: the marker is present.
+        """
+        if self.markers is not None:
+            return np.isfinite(self.markers).all(axis=-1)
         present = np.isfinite(self.uv).all(axis=-1)
         conf = self.confidence
         confident = np.isnan(conf) | (conf >= self.spec.min_confidence)

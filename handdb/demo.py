@@ -27,6 +27,12 @@ from handdb.store import Store
 from handdb.synthetic import SyntheticClip, synthesize_clip, thesis_clench_clip
 
 XRAY_SAMPLE = "chaudhry_table1.xray.csv"
+
+#: The demo's marker clip: frames (the fit runs at about one frame per second), marker
+#: noise and the share of markers hidden (about 15 of 21 visible, as in Zhao et al.).
+MARKER_FRAMES = 45
+MARKER_NOISE_MM = 1.0
+MARKER_DROPOUT = 0.28
 FIRST_QUERY = ("SELECT clip_id, method, round(avg(dz_mean), 2) AS mean_abs_dz, "
                "round(avg(mpjpe), 2) AS mpjpe FROM validation_joint "
                "GROUP BY ALL ORDER BY clip_id, mean_abs_dz")
@@ -114,6 +120,30 @@ def _write(inbox: Path, clip_id: str, clip: SyntheticClip, sidecar: dict, track_
     return written
 
 
+def _write_marker_clip(inbox: Path, clip_id: str, n_frames: int, seed: int) -> list[Path]:
+    """Write a 3D marker clip as a motion capture system gives it.
+
+    About 15 of 21 markers are visible per frame, with 1 mm noise, and the sidecar gives
+    no bone lengths: the fit calibrates the subject.
+    """
+    clip = synthesize_clip("rapid", n_frames, seed=seed)
+    skeleton = load_skeleton(clip.skeleton)
+    rng = np.random.default_rng(seed)
+    markers = clip.xyz + rng.normal(0.0, MARKER_NOISE_MM, clip.xyz.shape)
+    hidden = rng.random(markers.shape[:2]) < MARKER_DROPOUT
+    hidden[:, skeleton.root] = False
+    markers[hidden] = np.nan
+    sidecar = {"skeleton": clip.skeleton, "hand": clip.hand, "fps": clip.fps,
+               "subject": "s04", "units": clip.units}
+    sidecar_path = inbox / f"{clip_id}.clip.json"
+    sidecar_path.write_text(json.dumps(sidecar, indent=1))
+    marker_path = inbox / f"{clip_id}{get_format('markers_csv').suffix}"
+    get_format("markers_csv").write(marker_path, markers, skeleton)
+    truth_path = inbox / f"{clip_id}.truth.csv"
+    get_format("truth_csv").write(truth_path, clip.xyz, skeleton)
+    return [sidecar_path, marker_path, truth_path]
+
+
 def write_demo_inbox(inbox: Path) -> list[Path]:
     """Write the demo inputs into ``inbox`` (created if needed); return the paths written.
 
@@ -130,6 +160,7 @@ def write_demo_inbox(inbox: Path) -> list[Path]:
     del thesis_sidecar["image"]
     written += _write(inbox, "thesis-clench", thesis, thesis_sidecar, "maya", thesis.uv, None,
                       truth=True)
+    written += _write_marker_clip(inbox, "markers-s04", MARKER_FRAMES, seed=4)
     xray = inbox / XRAY_SAMPLE
     shutil.copyfile(str(files("handdb") / "data" / XRAY_SAMPLE), xray)
     written.append(xray)

@@ -23,12 +23,14 @@ import pyarrow as pa
 
 from handdb import __version__, tables, xray  # noqa: F401  (xray registers its inbox format)
 from handdb.bone_lengths import BoneLengths, bone_lengths_table, clip_bone_lengths
-from handdb.clip import Clip
+from handdb.clip import METERS_PER_UNIT, Clip
 from handdb.errors import BoneLengthError, InputError
 from handdb.gapfill import DEFAULT_METHOD as DEFAULT_GAP_FILL
 from handdb.gapfill import FillResult, UnknownMethodError, fill_gaps
 from handdb.lifting import DEFAULT_METHOD as DEFAULT_LIFT
 from handdb.lifting import LiftResult, available_methods, lift
+from handdb.markerfit import MarkerFit, fit_markers, joint_angles_table, joint_motion
+from handdb.markers import markers_3d_table
 from handdb.paths import SCHEMAS_DIR
 from handdb.preview import write_preview_png
 from handdb.quarantine import Refusal
@@ -39,8 +41,14 @@ from handdb.validation import comparison_chart, markdown_summary, validation_tab
 
 PACKAGE_DIR = Path(__file__).resolve().parent
 
-#: Lifting methods compared against ground truth for every clip that has it.
+#: Lifting methods compared against ground truth for every 2D clip that has it.
 VALIDATED_METHODS: tuple[str, ...] = ("thesis", "thesis-nocheck", DEFAULT_LIFT)
+
+#: The method name of positions fitted to 3D markers (Zhao et al. 2012).
+MARKER_FIT = "marker-fit"
+
+#: The skeleton the kinematic hand model of the marker fit is built on.
+MARKER_SKELETON = "mediapipe21"
 
 #: Folders of the database that hold files other than tables.
 USD_DIR, REPORTS_DIR = "usd", "reports"
@@ -98,6 +106,7 @@ class ClipResult:
     bones: BoneLengths | None = None
     fill: FillResult | None = None
     lifted: LiftResult | None = None
+    fit: MarkerFit | None = None
     validation: pa.Table | None = None
     report: str | None = None
     usd_path: str | None = None
@@ -136,7 +145,12 @@ def ingest(entry: ClipEntry, key: str) -> ClipResult | Refusal:
 
 
 def resolve_bone_lengths(result: ClipResult, ratios: pa.Table | None) -> ClipResult | Refusal:
-    """Give every bone of the clip a length, or refuse the clip when none can be had."""
+    """Give every bone of the clip a length, or refuse the clip when none can be had.
+
+    Marker clips pass: their fit calibrates the subject itself (:func:`fit_marker_clip`).
+    """
+    if result.clip.markers is not None:
+        return result
     if ratios is not None and ratios.num_rows == 0:
         ratios = None
     try:
@@ -147,8 +161,13 @@ def resolve_bone_lengths(result: ClipResult, ratios: pa.Table | None) -> ClipRes
 
 
 def fill(result: ClipResult, options: BuildOptions) -> ClipResult | Refusal:
-    """Fill the clip's missing 2D points with the chosen gap-filling method."""
+    """Fill the clip's missing 2D points with the chosen gap-filling method.
+
+    Marker clips pass: the model fit bridges missing markers itself.
+    """
     clip = result.clip
+    if clip.markers is not None:
+        return result
     method, params = _method(options.gap_fill, clip.spec.gap_fill, DEFAULT_GAP_FILL)
     try:
         filled = fill_gaps(clip.uv, clip.observed, clip.skeleton, method, **params)
@@ -158,8 +177,10 @@ def fill(result: ClipResult, options: BuildOptions) -> ClipResult | Refusal:
 
 
 def lift_clip(result: ClipResult, options: BuildOptions) -> ClipResult | Refusal:
-    """Lift the filled 2D points to 3D with the chosen method."""
+    """Lift the filled 2D points to 3D with the chosen method (marker clips: fit them)."""
     clip = result.clip
+    if clip.markers is not None:
+        return fit_marker_clip(result)
     method, params = _method(options.lift, clip.spec.lift, DEFAULT_LIFT)
     if method not in available_methods():
         return _refuse(ValueError(f"unknown lifting method '{method}'; known: "
@@ -172,13 +193,66 @@ def lift_clip(result: ClipResult, options: BuildOptions) -> ClipResult | Refusal
     return replace(result, lifted=lifted)
 
 
+def _fitted_bone_lengths(fit: MarkerFit, clip: Clip) -> BoneLengths:
+    """The bone lengths of a marker fit, in clip units, with their source."""
+    skeleton, spec = clip.skeleton, clip.spec
+    mm_per_unit = METERS_PER_UNIT[spec.units] * 1000.0
+    lengths = np.full(skeleton.n_joints, np.nan)
+    residuals = np.full(skeleton.n_joints, np.nan)
+    n_frames = np.zeros(skeleton.n_joints, dtype=np.int64)
+    child = skeleton.bones[:, 1]
+    lengths[child] = fit.model.bone_lengths / mm_per_unit
+    calibration = fit.calibration
+    if calibration is not None:
+        residuals[child] = calibration.residual / mm_per_unit
+        n_frames[child] = calibration.n_frames
+        detail = (f"Levenberg-Marquardt subject calibration over {len(calibration.frames)} "
+                  "marker frames with the X-ray ratio prior (Zhao et al. 2012, section 4)")
+        sources = ["calibrated"] * skeleton.n_joints
+        details = [detail] * skeleton.n_joints
+    else:
+        sources = ["given" if j in spec.bone_lengths else "anthropometric"
+                   for j in skeleton.joints]
+        details = [f"bone_lengths in {spec.path}" if j in spec.bone_lengths
+                   else "the hand model's template" for j in skeleton.joints]
+    root = skeleton.root
+    sources[root] = details[root] = None
+    return BoneLengths(skeleton=skeleton, units=spec.units, lengths=lengths,
+                       sources=tuple(sources), details=tuple(details), residuals=residuals,
+                       n_frames=n_frames)
+
+
+def fit_marker_clip(result: ClipResult) -> ClipResult | Refusal:
+    """Fit the kinematic hand model to the clip's 3D markers (Zhao et al. 2012).
+
+    Without bone lengths in the sidecar, the subject is calibrated from the clip first.
+    The sidecar's ``lift`` parameters go to :func:`handdb.markerfit.fit_markers`.
+    """
+    clip, spec = result.clip, result.clip.spec
+    if spec.skeleton != MARKER_SKELETON:
+        return _refuse(ValueError(f"marker clips use the {MARKER_SKELETON} marker set (the "
+                                  f"21 markers of Zhao et al.), not '{spec.skeleton}'"),
+                       result, field="skeleton")
+    params = {k: v for k, v in spec.lift.items() if k != "method"}
+    try:
+        fit = fit_markers(clip.markers, hand=spec.hand, units=spec.units,
+                          bone_lengths=spec.bone_lengths or None, **params)
+    except (TypeError, ValueError) as error:
+        return _refuse(error, result, field="lift")
+    n_frames, n_joints = clip.observed.shape
+    lifted = LiftResult(xyz=fit.joints, sign_confidence=np.full((n_frames, n_joints), np.nan),
+                        length_inconsistency=np.full((n_frames, n_joints), np.nan),
+                        scale=np.full(n_frames, np.nan), method=MARKER_FIT)
+    return replace(result, fit=fit, lifted=lifted, bones=_fitted_bone_lengths(fit, clip))
+
+
 def validate(result: ClipResult) -> ClipResult:
     """Compare the lifting methods against the clip's ground truth, if it has any."""
     clip = result.clip
     if clip.truth is None:
         return result
     estimates = {result.lifted.method: result.lifted}
-    for method in VALIDATED_METHODS:
+    for method in VALIDATED_METHODS if clip.markers is None else ():
         if method not in estimates:
             estimates[method] = lift(result.uv, clip.skeleton, result.bones.lengths,
                                      clip.spec.camera, method=method, hand=clip.spec.hand)
@@ -212,10 +286,11 @@ def export(result: ClipResult, store: Store, options: BuildOptions) -> ClipResul
     spec = clip.spec
     with tempfile.TemporaryDirectory() as scratch:
         scratch_dir = Path(scratch)
+        rotations = joint_motion(result.fit, spec.units) if result.fit is not None else None
         usd = export_clip_usd(scratch_dir / f"{clip.clip_id}.usd", clip_id=clip.clip_id,
                               skeleton=clip.skeleton, xyz=lifted.xyz,
                               bone_lengths=result.bones.lengths, fps=spec.fps,
-                              units=spec.units, hand=spec.hand)
+                              units=spec.units, hand=spec.hand, rotations=rotations)
         usd_path = _put(store, usd, USD_DIR, usd.name)
         preview = write_preview_png(scratch_dir / "preview.png", skeleton=clip.skeleton,
                                     xyz=lifted.xyz, units=spec.units, fps=spec.fps,
@@ -293,6 +368,11 @@ def clip_tables(result: ClipResult, inbox: Path) -> dict[str, pa.Table]:
                                                  result.bones)
     if result.validation is not None:
         out["validation_joint"] = result.validation
+    if clip.markers is not None:
+        out["markers_3d"] = markers_3d_table(clip.clip_id, clip.markers, clip.skeleton)
+    if result.fit is not None:
+        out["joint_angles"] = joint_angles_table(clip.clip_id, result.fit.model,
+                                                 result.fit.poses)
     return out
 
 

@@ -9,7 +9,16 @@ describes each exactly. Typical use::
         tracks = tracks_2d_table(clip)
 """
 
-from handdb.readers import dlc, maya, mediapipe, openpose, tracks_csv, truth_csv
+from handdb.readers import (
+    c3d,
+    dlc,
+    markers_csv,
+    maya,
+    mediapipe,
+    openpose,
+    tracks_csv,
+    truth_csv,
+)
 from handdb.readers.clip_tables import tracks_2d_table, truth_3d_table
 from handdb.readers.inbox import ClipEntry, InboxScan, content_hash, discover, load_clip
 from handdb.readers.observations import Observations, Positions
@@ -20,7 +29,7 @@ from handdb.readers.registry import (
     registered_formats,
 )
 
-for _module in (tracks_csv, openpose, dlc, mediapipe, maya, truth_csv):
+for _module in (tracks_csv, openpose, dlc, mediapipe, maya, truth_csv, markers_csv, c3d):
     register_format(_module.FORMAT)
 del _module
 

@@ -17,9 +17,8 @@ import numpy as np
 
 from handdb.clip import METERS_PER_UNIT, ClipSpec
 from handdb.errors import InputError
-from handdb.readers.markers_csv import MARKERS_KIND
 from handdb.readers.observations import Positions, resolve_joints, single_file_rows
-from handdb.readers.registry import InputFormat, register_format
+from handdb.readers.registry import MARKERS_KIND, InputFormat, register_format
 from handdb.skeletons import Skeleton
 
 #: The C3D parameter that names the point units.

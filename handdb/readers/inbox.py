@@ -23,6 +23,8 @@ from handdb.errors import InputError
 from handdb.readers.observations import Observations, Positions
 from handdb.readers.registry import (
     CLIP_KINDS,
+    DATA_KINDS,
+    MARKERS_KIND,
     SIDECAR_SUFFIX,
     get_format,
     match_format,
@@ -103,8 +105,9 @@ def _entries(inbox: Path) -> Iterator[tuple[str, str, str, Path]]:
 def _assemble(clip_id: str, inbox: Path,
               found: dict[str, list[tuple[str, Path]]]) -> ClipEntry | list[InputError]:
     """Make one clip of the entries found for ``clip_id``, or say why not."""
-    sidecars, tracks, truths = found[SIDECAR], found["tracks"], found["truth"]
-    track_suffixes = ", ".join(f.suffix for f in registered_formats() if f.kind == "tracks")
+    sidecars, truths = found[SIDECAR], found["truth"]
+    tracks = [entry for kind in DATA_KINDS for entry in found[kind]]
+    track_suffixes = ", ".join(f.suffix for f in registered_formats() if f.kind in DATA_KINDS)
     if not sidecars:
         return [InputError(path, f"has no sidecar: add {clip_id}{SIDECAR_SUFFIX} (skeleton, "
                            "hand, fps, subject, units, camera) next to it", clip_id=clip_id)
@@ -209,11 +212,13 @@ def load_clip(entry: ClipEntry) -> Clip:
         For the first problem in any of the clip's files, with ``clip_id`` set.
     """
     try:
-        spec = parse_sidecar(entry.sidecar, entry.clip_id)
-        skeleton = load_skeleton(spec.skeleton)
         track_format = get_format(entry.track_format)
+        three_d = track_format.kind == MARKERS_KIND
+        spec = parse_sidecar(entry.sidecar, entry.clip_id, three_d=three_d)
+        skeleton = load_skeleton(spec.skeleton)
         observations = track_format.read(entry.tracks, spec, skeleton)
-        if not np.isfinite(observations.uv).all(axis=1).any():
+        points = observations.xyz if three_d else observations.uv
+        if not np.isfinite(points).all(axis=1).any():
             raise InputError(entry.tracks, "holds no point of the hand in any frame")
         if entry.truth_format is not None:
             truth_rows = get_format(entry.truth_format).read(entry.truth, spec, skeleton)
@@ -229,12 +234,16 @@ def load_clip(entry: ClipEntry) -> Clip:
         raise InputError(exc.filename or entry.tracks, f"cannot be read: {exc.strerror}",
                          clip_id=entry.clip_id) from exc
     n_frames = max(observations.n_frames, truth_rows.n_frames if truth_rows else 0)
+    no_points = np.full((n_frames, skeleton.n_joints), np.nan)
     return Clip(
         spec=spec,
         skeleton=skeleton,
-        uv=_dense(observations, observations.uv, n_frames),
-        confidence=_dense(observations, observations.confidence, n_frames),
+        uv=(np.stack([no_points, no_points], axis=-1) if three_d
+            else _dense(observations, observations.uv, n_frames)),
+        confidence=no_points if three_d else _dense(observations, observations.confidence,
+                                                    n_frames),
         truth=_dense(truth_rows, truth_rows.xyz, n_frames) if truth_rows else None,
+        markers=_dense(observations, observations.xyz, n_frames) if three_d else None,
         source_format=track_format.name,
         source_files=tuple(str(path) for path in entry.paths),
         content_hash=hash_hex,

@@ -17,13 +17,10 @@ from handdb.clip import ClipSpec
 from handdb.readers.delimited import write_csv
 from handdb.readers.long_csv import joint_column, read_long_csv
 from handdb.readers.observations import Positions, single_file_rows
-from handdb.readers.registry import InputFormat, register_format
+from handdb.readers.registry import MARKERS_KIND, InputFormat, register_format
 from handdb.skeletons import Skeleton
 
 COLUMNS = ("frame", "joint", "x", "y", "z")
-
-#: Kind of input of marker tracks in the inbox registry.
-MARKERS_KIND = "markers"
 
 
 def read(path: str | Path, spec: ClipSpec, skeleton: Skeleton) -> Positions:

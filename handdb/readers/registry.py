@@ -5,7 +5,9 @@ format it is (``.tracks.csv``, ``.openpose`` for a folder, ...). Each format is 
 :class:`InputFormat` with a *kind*:
 
 ``tracks``
-    2D keypoint tracks of one clip; every clip has exactly one track file.
+    2D keypoint tracks of one clip; every clip has exactly one track or marker file.
+``markers``
+    3D marker tracks of one clip (its data file instead of 2D tracks).
 ``truth``
     Optional 3D ground truth of one clip.
 anything else
@@ -25,8 +27,14 @@ from typing import Any
 #: The suffix of a clip's sidecar, ``<clip_id>.clip.json``.
 SIDECAR_SUFFIX = ".clip.json"
 
+#: Kind of the 3D marker formats: a clip's data file that is already 3D.
+MARKERS_KIND = "markers"
+
+#: Kinds a clip's one data file may be: 2D tracks or 3D markers.
+DATA_KINDS = ("tracks", MARKERS_KIND)
+
 #: Kinds of input the inbox scan assembles into clips.
-CLIP_KINDS = ("tracks", "truth")
+CLIP_KINDS = (*DATA_KINDS, "truth")
 
 
 @dataclass(frozen=True)
