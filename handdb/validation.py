@@ -157,6 +157,11 @@ def clip_summary(table: pa.Table) -> dict[str, dict[str, float]]:
     return out
 
 
+def _number(value: float | None) -> str:
+    """Three significant digits, or a dash where a method gave no value."""
+    return "-" if value is None or not np.isfinite(value) else f"{value:.3g}"
+
+
 def markdown_summary(clip_id: str, table: pa.Table) -> str:
     """Compare the methods on one clip in markdown (whole clip, then per joint)."""
     units = table.column("units")[0].as_py() if table.num_rows else ""
@@ -165,8 +170,8 @@ def markdown_summary(clip_id: str, table: pa.Table) -> str:
              f"| method | mean abs dZ ({units}) | sign accuracy | MPJPE ({units}) |",
              "|---|---:|---:|---:|"]
     for method, figures in sorted(summary.items(), key=lambda kv: kv[1]["dz_mean"]):
-        lines.append(f"| {method} | {figures['dz_mean']:.3g} | "
-                     f"{figures['sign_accuracy']:.1%} | {figures['mpjpe']:.3g} |")
+        lines.append(f"| {method} | {_number(figures['dz_mean'])} | "
+                     f"{figures['sign_accuracy']:.1%} | {_number(figures['mpjpe'])} |")
     rows = table.to_pylist()
     methods = list(summary)
     lines += ["", "Mean abs dZ per joint (Table 4.1's average column):", "",
@@ -176,7 +181,7 @@ def markdown_summary(clip_id: str, table: pa.Table) -> str:
     for row in rows:
         by_joint.setdefault(row["joint"], {})[row["method"]] = row["dz_mean"]
     for joint, values in by_joint.items():
-        cells = " | ".join(f"{values.get(m, float('nan')):.3g}" for m in methods)
+        cells = " | ".join(_number(values.get(m)) for m in methods)
         lines.append(f"| {joint} | {cells} |")
     return "\n".join(lines) + "\n"
 
@@ -190,7 +195,8 @@ def comparison_chart(clip_id: str, table: pa.Table, skeleton: Skeleton) -> bytes
     width = 0.8 / max(len(methods), 1)
     figure, axes = plt.subplots(figsize=(12, 4))
     for k, method in enumerate(methods):
-        heights = [values.get((method, joint), np.nan) for joint in skeleton.joints]
+        heights = [np.nan if values.get((method, joint)) is None else values[(method, joint)]
+                   for joint in skeleton.joints]
         axes.bar(x + k * width, heights, width, label=method)
     units = rows[0]["units"] if rows else ""
     axes.set_xticks(x + 0.4 - width / 2, skeleton.joints, rotation=60, ha="right")

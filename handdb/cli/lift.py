@@ -63,13 +63,18 @@ def _synthetic_clip(motion: str, camera: str, seed: int):
             clip.units)
 
 
+def _number(value: float | None) -> str:
+    """Three significant digits, or a dash where the method gave no value."""
+    return "-" if value is None or value != value else f"{value:.3g}"
+
+
 def _print_tables(clip_id: str, table, skeleton: Skeleton, units: str) -> None:
     summary = Table(title=f"{clip_id}: depth against ground truth")
     for heading in ("method", f"mean |dZ| ({units})", "sign accuracy", f"MPJPE ({units})"):
         summary.add_column(heading, justify="left" if heading == "method" else "right")
     for method, f in sorted(clip_summary(table).items(), key=lambda kv: kv[1]["dz_mean"]):
-        summary.add_row(method, f"{f['dz_mean']:.3g}", f"{f['sign_accuracy']:.1%}",
-                        f"{f['mpjpe']:.3g}")
+        summary.add_row(method, _number(f["dz_mean"]), f"{f['sign_accuracy']:.1%}",
+                        _number(f["mpjpe"]))
     out.print(summary)
     rows = table.to_pylist()
     methods = list(dict.fromkeys(r["method"] for r in rows))
@@ -80,7 +85,7 @@ def _print_tables(clip_id: str, table, skeleton: Skeleton, units: str) -> None:
     for method in methods:
         joints.add_column(method, justify="right")
     for j, joint in enumerate(skeleton.joints):
-        cells = [f"{values[(m, joint)]['dz_mean']:.3g}" for m in methods]
+        cells = [_number(values[(m, joint)]["dz_mean"]) for m in methods]
         joints.add_row(str(skeleton.ids[j]), joint, *cells)
     out.print(joints)
 
