@@ -95,11 +95,14 @@ def palm_motion(uv: np.ndarray, missing: np.ndarray, skeleton: Skeleton) -> Palm
         return None
     linear = _interpolate_in_time(linear, fitted)
     offset = _interpolate_in_time(offset, fitted)
-    predicted = reference @ np.swapaxes(linear, 1, 2) + offset[:, None]
-    correction, shift, kind = fit_maps(predicted, points, seen & ~fitted[:, None], affine=False)
-    corrected = kind > NO_MAP
-    linear = np.where(corrected[:, None, None], correction @ linear, linear)
-    offset = np.where(corrected[:, None], apply_linear(correction, offset) + shift, offset)
+    interpolated = np.flatnonzero(~fitted)
+    predicted = reference @ np.swapaxes(linear[interpolated], 1, 2) + offset[interpolated, None]
+    correction, shift, kind = fit_maps(predicted, points[interpolated], seen[interpolated],
+                                       affine=False)
+    corrected = interpolated[kind > NO_MAP]
+    correction, shift = correction[kind > NO_MAP], shift[kind > NO_MAP]
+    linear[corrected] = correction @ linear[corrected]
+    offset[corrected] = apply_linear(correction, offset[corrected]) + shift
     return PalmMotion(linear=linear, offset=offset, fitted=fitted)
 
 
