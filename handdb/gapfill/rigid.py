@@ -89,8 +89,9 @@ def carry_across_gaps(
     gap, frame, joint = gaps.frames()
     before = np.maximum(gaps.start[gap] - 1, 0)
     after = np.minimum(gaps.stop[gap], gaps.n_frames - 1)
-    from_before = _carry(uv, missing, before, frame, joint, basis, affine)
-    from_after = _carry(uv, missing, after, frame, joint, basis, affine)
+    from_before, from_after = np.split(
+        _carry(uv, missing, np.concatenate([before, after]), np.tile(frame, 2),
+               np.tile(joint, 2), basis, affine), 2)
     share_after = ((frame - before) / np.maximum(after - before, 1))[:, None]
     blended = (1 - share_after) * from_before + share_after * from_after
     blended = np.where(gaps.leading[gap][:, None], from_after, blended)
