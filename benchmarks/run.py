@@ -436,8 +436,7 @@ def main(plan: Plan, out: Path) -> dict:
         results["startup"] = startup
         print(f"start-up (empty build in a fresh process): {startup['process_seconds']:.1f} s, "
               f"{startup['cpu_seconds']:.1f} s CPU "
-              f"(imports {results['startup']['import_seconds']:.1f} s), "
-              f"{results['startup']['maxrss_mb']:.0f} MB")
+              f"(imports {startup['import_seconds']:.1f} s), {startup['maxrss_mb']:.0f} MB")
 
         n_clips, n_frames = plan.stage_clips
         stage_inbox = scratch / "stage-inbox"
