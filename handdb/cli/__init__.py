@@ -225,9 +225,10 @@ def demo(inbox: Inbox = DEFAULT_INBOX, db: Db = DEFAULT_DB) -> None:
 
 
 def _register_subcommands() -> None:
-    from handdb.cli import export, gapfill, ratios
+    from handdb.cli import export, gapfill, lift, ratios
 
     app.add_typer(ratios.app, name="ratios")
+    app.add_typer(lift.app, name="lift")
     app.command("gapfill-eval")(gapfill.gapfill_eval)
     app.command("export-usd")(export.export_usd)
     app.command("export-bvh")(export.export_bvh)

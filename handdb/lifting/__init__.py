@@ -9,7 +9,7 @@ default (:mod:`handdb.lifting.kinematic`), and ``kinematic-refined``, the defaul
 by nonlinear least squares (:mod:`handdb.lifting.refine`).
 """
 
-from handdb.lifting import kinematic, refine, thesis  # noqa: F401  (registers the methods)
+from handdb.lifting import kinematic, model_fit, refine, thesis  # noqa: F401  (registers the methods)
 from handdb.lifting.registry import (
     DEFAULT_METHOD,
     available_methods,
