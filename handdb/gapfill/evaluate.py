@@ -16,6 +16,7 @@ thesis's Figure 4.6 (:func:`plot_masks`, every mask of a clip in one chart);
 
 from __future__ import annotations
 
+import threading
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -44,6 +45,10 @@ MASKS = (THESIS_MASK, RANDOM_MASK, OCCLUSION_MASK)
 
 #: Frames per :data:`~handdb.gapfill.masks.RANDOM_GAPS` random gaps.
 RANDOM_GAPS_PER_FRAMES = 400
+
+#: Held while a chart is drawn: matplotlib's text layout is not thread-safe, and the
+#: evaluation flow scores clips in threads.
+_DRAWING = threading.Lock()
 
 
 @dataclass(frozen=True)
@@ -251,13 +256,14 @@ def plot_errors(
     pathlib.Path
         The PNG written.
     """
-    figure = Figure(figsize=(12, 4.5))
-    _draw_errors(figure.subplots(), evaluation, mask, skeleton,
-                 _methods_of(evaluation, mask, methods),
-                 title or f"gap-filling error per frame, mask {mask}")
-    figure.tight_layout()
     path = Path(path)
-    figure.savefig(path, dpi=120)
+    with _DRAWING:
+        figure = Figure(figsize=(12, 4.5))
+        _draw_errors(figure.subplots(), evaluation, mask, skeleton,
+                     _methods_of(evaluation, mask, methods),
+                     title or f"gap-filling error per frame, mask {mask}")
+        figure.tight_layout()
+        figure.savefig(path, dpi=120)
     return path
 
 
@@ -270,11 +276,13 @@ def plot_masks(
     ``target`` is a path or a binary file the PNG is written to.
     """
     masks = list(evaluation.hidden)
-    figure = Figure(figsize=(12, 4.5 * len(masks)))
-    for axes, mask in zip(np.atleast_1d(figure.subplots(len(masks), 1)), masks, strict=True):
-        _draw_errors(axes, evaluation, mask, skeleton, _methods_of(evaluation, mask, methods),
-                     f"mask {mask}")
-    if title:
-        figure.suptitle(title)
-    figure.tight_layout()
-    figure.savefig(target, dpi=120, format="png")
+    with _DRAWING:
+        figure = Figure(figsize=(12, 4.5 * len(masks)))
+        for axes, mask in zip(np.atleast_1d(figure.subplots(len(masks), 1)), masks,
+                              strict=True):
+            _draw_errors(axes, evaluation, mask, skeleton,
+                         _methods_of(evaluation, mask, methods), f"mask {mask}")
+        if title:
+            figure.suptitle(title)
+        figure.tight_layout()
+        figure.savefig(target, dpi=120, format="png")

@@ -23,6 +23,7 @@ import pyarrow as pa
 
 from handdb.errors import InputError
 from handdb.gapfill.evaluate import Evaluation, plot_masks
+from handdb.gapfill.registry import DEFAULT_METHOD, METHODS, THESIS
 from handdb.readers.inbox import ClipEntry, load_clip
 from handdb.skeletons import Skeleton, load_skeleton
 from handdb.store import Store
@@ -169,16 +170,21 @@ def store_evaluation(
 ) -> str:
     """Write a clip's ``gapfill_eval`` rows and its chart (one panel per mask) into ``store``.
 
+    The chart, like the thesis's Figure 4.6, draws the thesis's methods among ``methods``
+    and the default last, on top (all of ``methods`` when none of those was scored).
+
     Returns
     -------
     str
         The chart's path on the store's filesystem.
     """
     store.write(EVAL_TABLE, clip.clip_id, evaluation.table)
+    charted = [m for m in methods if METHODS[m].family == THESIS]
+    charted += [DEFAULT_METHOD] if DEFAULT_METHOD in methods else []
     path = chart_path(store, clip.clip_id)
     store.fs.makedirs(store.path(REPORTS, clip.clip_id), exist_ok=True)
     with store.fs.open(path, "wb") as fh:
-        plot_masks(evaluation, clip.skeleton, fh, methods=methods,
+        plot_masks(evaluation, clip.skeleton, fh, methods=charted or list(methods),
                    title=f"{clip.clip_id}: gap-filling error per frame")
     return path
 
