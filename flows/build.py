@@ -132,11 +132,11 @@ def lift(result: Outcome, clip_id: str, options: pipeline.BuildOptions) -> Outco
 
 
 @task(name="validate", task_run_name="validate {clip_id}", cache_policy=NO_CACHE)
-def validate(result: Outcome, clip_id: str) -> Outcome:
+def validate(result: Outcome, clip_id: str, options: pipeline.BuildOptions) -> Outcome:
     """Compare lifting methods against ground truth; publish the comparison."""
     if isinstance(result, Refusal):
         return result
-    result = pipeline.validate(result)
+    result = pipeline.validate(result, options)
     if result.report is not None:
         create_markdown_artifact(markdown=result.report, key=artifact_key("validation", clip_id),
                                  description=f"depth validation of clip {clip_id}")
@@ -175,7 +175,7 @@ def _run_clip_chain(entry: Any, key: str, db: str, inbox: str, ratios: pa.Table,
     chain["bone-lengths"] = bone_lengths.submit(chain["ingest"], clip_id, ratios)
     chain["gap-fill"] = gap_fill.submit(chain["bone-lengths"], clip_id, options)
     chain["lift"] = lift.submit(chain["gap-fill"], clip_id, options)
-    chain["validate"] = validate.submit(chain["lift"], clip_id)
+    chain["validate"] = validate.submit(chain["lift"], clip_id, options)
     chain["export"] = export.submit(chain["validate"], clip_id, db, options)
     chain["commit"] = commit.submit(chain["export"], clip_id, db, inbox)
     return chain
@@ -210,11 +210,13 @@ def task_runner(runner: str = "thread", workers: int = DEFAULT_WORKERS,
 
 
 def run(inbox: str, db: str, *, gap_fill: str | None = None, lift: str | None = None,
-        export_usd: bool = True, workers: int = DEFAULT_WORKERS, runner: str = "thread",
+        export_usd: bool = True, compare: tuple[str, ...] = (),
+        workers: int = DEFAULT_WORKERS, runner: str = "thread",
         dask_address: str | None = None) -> BuildSummary:
     """Run :func:`build` on the chosen task runner."""
     flow_ = build.with_options(task_runner=task_runner(runner, workers, dask_address))
     return flow_(inbox=inbox, db=db, gap_fill=gap_fill, lift=lift, export_usd=export_usd,
+                 compare=list(compare),
                  window=workers * WINDOW_PER_WORKER)
 
 
@@ -226,6 +228,7 @@ def build(
     gap_fill: str | None = None,
     lift: str | None = None,
     export_usd: bool = True,
+    compare: list[str] | None = None,
     window: int = DEFAULT_WORKERS * WINDOW_PER_WORKER,
 ) -> BuildSummary:
     """Build the database at ``db`` from the inbox folder ``inbox``.
@@ -235,7 +238,8 @@ def build(
     """
     logger = get_run_logger()
     started = datetime.now(UTC)
-    options = pipeline.BuildOptions(gap_fill=gap_fill, lift=lift, export_usd=export_usd)
+    options = pipeline.BuildOptions(gap_fill=gap_fill, lift=lift, export_usd=export_usd,
+                                    compare=tuple(compare or ()))
     summary = BuildSummary(run_id=uuid.uuid4().hex[:12], inbox=inbox, db=db)
     store = Store(db)
     with store.lock(), threadpool_limits(limits=BLAS_THREADS, user_api="blas"):

@@ -7,9 +7,10 @@ The sidecar says how to read the clip's track file and what the numbers mean::
 
 ``camera`` may instead be ``{"model": "pinhole", "fx": .., "fy": .., "cx": .., "cy": ..}``
 (pixels); a clip whose data file is already 3D (markers) needs no camera. Optional keys:
-``bone_lengths`` (child joint -> length in ``units``), ``min_confidence`` (default 0.5), ``joint_map`` (tool names -> canonical names),
-``image`` (``{"width": W, "height": H}``, pixels; needed for normalised coordinates),
-``gap_fill`` and ``lift`` (``{"method": NAME, ...parameters}``).
+``bone_lengths`` (child joint -> length in ``units``), ``min_confidence`` (default 0.5),
+``joint_map`` (tool names -> canonical names), ``image`` (``{"width": W, "height": H}``,
+pixels; needed for normalised coordinates), ``gap_fill`` and ``lift``
+(``{"method": NAME, ...parameters}``).
 """
 
 from __future__ import annotations

@@ -59,12 +59,15 @@ class BuildOptions:
     """Parameters of a build that change what is computed for a clip.
 
     ``gap_fill`` and ``lift`` override the method every clip's sidecar asks for
-    (``None``: the sidecar's choice, else the default method).
+    (``None``: the sidecar's choice, else the default method). ``compare`` names lifting
+    methods validated beside :data:`VALIDATED_METHODS` on clips with ground truth (e.g.
+    ``model-fit``, which costs about a minute per clip).
     """
 
     gap_fill: str | None = None
     lift: str | None = None
     export_usd: bool = True
+    compare: tuple[str, ...] = ()
 
 
 @cache
@@ -246,13 +249,14 @@ def fit_marker_clip(result: ClipResult) -> ClipResult | Refusal:
     return replace(result, fit=fit, lifted=lifted, bones=_fitted_bone_lengths(fit, clip))
 
 
-def validate(result: ClipResult) -> ClipResult:
+def validate(result: ClipResult, options: BuildOptions) -> ClipResult:
     """Compare the lifting methods against the clip's ground truth, if it has any."""
     clip = result.clip
     if clip.truth is None:
         return result
     estimates = {result.lifted.method: result.lifted}
-    for method in VALIDATED_METHODS if clip.markers is None else ():
+    methods = (*VALIDATED_METHODS, *options.compare) if clip.markers is None else ()
+    for method in methods:
         if method not in estimates:
             estimates[method] = lift(result.uv, clip.skeleton, result.bones.lengths,
                                      clip.spec.camera, method=method, hand=clip.spec.hand)

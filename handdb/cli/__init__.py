@@ -70,7 +70,8 @@ class ClipProgress:
 
 
 def run_build(inbox: str, db: str, *, gap_fill: str | None = None, lift: str | None = None,
-              export_usd: bool = True, workers: int = 4, runner: str = "thread",
+              export_usd: bool = True, compare: tuple[str, ...] = (), workers: int = 4,
+              runner: str = "thread",
               dask_address: str | None = None, quiet: bool = False):
     """Run the build flow with a progress bar; return its summary.
 
@@ -93,9 +94,9 @@ def run_build(inbox: str, db: str, *, gap_fill: str | None = None, lift: str | N
                TimeElapsedColumn())
     with Progress(*columns, console=console, transient=True, disable=quiet) as bar:
         with build_progress.reporting(ClipProgress(bar)), quick_flows():
-            return run(inbox, db, gap_fill=gap_fill, lift=lift,
-                         export_usd=export_usd, workers=workers, runner=runner,
-                         dask_address=dask_address)
+            return run(inbox, db, gap_fill=gap_fill, lift=lift, export_usd=export_usd,
+                       compare=compare, workers=workers, runner=runner,
+                       dask_address=dask_address)
 
 
 def print_summary(summary) -> None:
@@ -125,6 +126,9 @@ def build(
         help="Lifting method for every clip (default: each clip's sidecar, else the best "
         "method).")] = None,
     usd: Annotated[bool, typer.Option(help="Export every clip as USD.")] = True,
+    compare: Annotated[list[str] | None, typer.Option(
+        help="Also validate this lifting method on clips with ground truth (repeatable; "
+        "e.g. model-fit, about a minute per clip).")] = None,
     workers: Annotated[int, typer.Option(min=1, help="Clips processed in parallel.")] = 4,
     runner: Annotated[str, typer.Option(
         help="Task runner: thread, or dask (a local cluster unless --dask-address is "
@@ -139,7 +143,8 @@ def build(
     """
     try:
         summary = run_build(inbox, db, gap_fill=gap_fill, lift=lift, export_usd=usd,
-                            workers=workers, runner=runner, dask_address=dask_address)
+                            compare=tuple(compare or ()), workers=workers, runner=runner,
+                            dask_address=dask_address)
     except HanddbError as exc:
         console.print(f"[red]error:[/] {exc}")
         raise typer.Exit(EXIT_FAILED) from None
