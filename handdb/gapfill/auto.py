@@ -124,13 +124,20 @@ def _long_gap_fill(
     trial_filled = np.where(hidden[..., None], np.nan, filled)
     trials = estimate_long_gaps(VALIDATED_ESTIMATES, trial_local, trial_filled, trial_missing,
                                 find_gaps(hidden), skeleton, variance)
-    errors = np.array([np.sum(np.where(hidden, np.sum((trial - local) ** 2, axis=-1), 0.0), axis=0)
-                       for trial in trials])
+    frame, joint = np.nonzero(hidden)
+    errors = np.array([
+        np.bincount(joint, np.sum((trial[frame, joint] - local[frame, joint]) ** 2, axis=-1),
+                    minlength=missing.shape[1])
+        for trial in trials])
     inverse = 1.0 / np.maximum(errors, np.finfo(float).tiny)
     weights = np.where(hidden.any(axis=0), inverse / inverse.sum(axis=0), 1.0 / len(trials))
     estimates = estimate_long_gaps(VALIDATED_ESTIMATES, local, filled, missing, gaps, skeleton,
                                    variance)
-    return np.sum(weights[:, None, :, None] * np.array(estimates), axis=0)
+    _, frame, joint = gaps.frames()
+    blended = filled.copy()
+    blended[frame, joint] = np.sum(
+        weights[:, joint, None] * np.stack([e[frame, joint] for e in estimates]), axis=0)
+    return blended
 
 
 @register("auto", OFFLINE, "default: rigid palm, PCHIP short gaps, validated chain/regression")
