@@ -102,3 +102,17 @@ def test_a_build_holds_the_lock(inbox, tmp_path):
     db = tmp_path / "db"
     with Store(str(db)).lock(), pytest.raises(DatabaseLockedError, match="being built"):
         build(inbox, db)
+
+
+@pytest.mark.slow
+def test_further_methods_are_validated_on_request(tmp_path, write_clip):
+    inbox = tmp_path / "inbox"
+    inbox.mkdir()
+    write_clip(inbox, "solo", seed=4)
+    with quick_flows():
+        summary = run(str(inbox), str(tmp_path / "db"), export_usd=False, workers=1,
+                      compare=("model-fit",))
+    assert summary.ok
+    methods = query(str(tmp_path / "db"), "SELECT DISTINCT method FROM validation_joint "
+                                          "ORDER BY method").column(0).to_pylist()
+    assert methods == ["kinematic", "model-fit", "thesis", "thesis-nocheck"]
