@@ -78,14 +78,19 @@ def palm_motion(uv: np.ndarray, missing: np.ndarray, skeleton: Skeleton) -> Palm
         return None
     points, seen = uv[:, palm], palm_seen[:, palm]
     complete = seen.all(axis=1)
+    # The reference is shaped by the frames showing the whole palm (else by every frame
+    # whose fit is affine): only those are fitted while shaping it.
+    shape_from = np.flatnonzero(complete) if complete.any() else np.arange(len(uv))
+    shape_points, shape_seen = points[shape_from], seen[shape_from]
     reference = rest_pose_2d(skeleton)[palm]
     for _ in range(2):
-        linear, offset, kind = fit_maps(_repeat(reference, len(uv)), points, seen)
+        linear, offset, kind = fit_maps(_repeat(reference, shape_from.size), shape_points,
+                                        shape_seen)
         fitted = kind == AFFINE
-        shaping = complete if complete.any() else fitted
+        shaping = complete[shape_from] if complete.any() else fitted
         inverse = inverse_2x2(np.where(fitted[:, None, None], linear, np.eye(2)))
-        canonical = apply_linear(inverse, np.nan_to_num(points) - offset[:, None])
-        canonical = np.where((seen & shaping[:, None])[..., None], canonical, np.nan)
+        canonical = apply_linear(inverse, np.nan_to_num(shape_points) - offset[:, None])
+        canonical = np.where((shape_seen & shaping[:, None])[..., None], canonical, np.nan)
         seen_once = ~np.isnan(canonical[..., 0]).all(axis=0)
         reference = np.where(seen_once[:, None], np.nanmedian(
             np.where(seen_once[None, :, None], canonical, 0.0), axis=0), reference)
