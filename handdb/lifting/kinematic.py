@@ -117,6 +117,11 @@ TEMPORAL_FLOOR = 0.05
 #: The clip-wide mirror counts as settled when it is this many times less likely.
 MIRROR_SETTLED_ODDS = 20.0
 
+#: Largest say one finger has on a frame's palm tilt, nats: a finger the prior models badly
+#: (an opposed thumb) or a mis-tracked one cannot outvote the others (on the real DHG
+#: capture the thumb alone, confidently wrong, flipped the palm for half the clip).
+FINGER_VOTE_CAP = 4.0
+
 HANDEDNESS = {"right": 1.0, "left": -1.0}
 
 
@@ -341,10 +346,11 @@ def resolve_signs(
     anatomy, comfort = finger_log_likelihood(candidates, bone_lengths, layout, hand)
     log_lik = anatomy + comfort
 
-    evidence = _log_evidence(log_lik).sum(axis=-1)                      # (T, 2)
+    evidence = _log_evidence(log_lik)                                    # (T, 2, F)
+    votes = np.clip(evidence[:, 0] - evidence[:, 1], -FINGER_VOTE_CAP, FINGER_VOTE_CAP)
     tilt = np.sqrt(np.nanmean(abs_dz[:, layout.palm_bones] ** 2, axis=1, keepdims=True))
     floor = TEMPORAL_FLOOR * np.nanmean(bone_lengths[layout.palm_bones], keepdims=True)
-    palm_odds = sign_posterior(evidence[:, :1] - evidence[:, 1:], flip_costs(tilt, floor))[:, 0]
+    palm_odds = sign_posterior(votes.sum(axis=1, keepdims=True), flip_costs(tilt, floor))[:, 0]
     state = (palm_odds < 0).astype(np.int64)
     chosen = np.take_along_axis(log_lik, state[:, None, None, None], axis=1)[:, 0]
 
