@@ -53,29 +53,32 @@ def flip_costs(magnitude: np.ndarray, floor: np.ndarray) -> np.ndarray:
 
 
 def _product(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """Multiply stacks of 2×2 matrices, ``a @ b``, rescaled to a largest entry of 1."""
-    out = np.empty(np.broadcast_shapes(a.shape, b.shape))
-    a0, a1 = a[..., 0, :], a[..., 1, :]
-    b0, b1 = b[..., :, 0], b[..., :, 1]
-    out[..., 0, 0] = a0[..., 0] * b0[..., 0] + a0[..., 1] * b0[..., 1]
-    out[..., 0, 1] = a0[..., 0] * b1[..., 0] + a0[..., 1] * b1[..., 1]
-    out[..., 1, 0] = a1[..., 0] * b0[..., 0] + a1[..., 1] * b0[..., 1]
-    out[..., 1, 1] = a1[..., 0] * b1[..., 0] + a1[..., 1] * b1[..., 1]
-    peak = np.maximum(np.maximum(out[..., 0, 0], out[..., 0, 1]),
-                      np.maximum(out[..., 1, 0], out[..., 1, 1]))
-    return out / peak[..., None, None]
+    """Multiply stacks of 2×2 matrices, ``a @ b``, rescaled to a largest entry of 1.
+
+    Matrices are held entry-major, ``(2, 2, ...)``, so every entry is one contiguous
+    array and the products are plain elementwise operations.
+    """
+    out = np.stack([np.stack([a[0, 0] * b[0, 0] + a[0, 1] * b[1, 0],
+                              a[0, 0] * b[0, 1] + a[0, 1] * b[1, 1]]),
+                    np.stack([a[1, 0] * b[0, 0] + a[1, 1] * b[1, 0],
+                              a[1, 0] * b[0, 1] + a[1, 1] * b[1, 1]])])
+    return out / np.maximum(np.maximum(out[0, 0], out[0, 1]),
+                            np.maximum(out[1, 0], out[1, 1]))
 
 
 def _prefix_products(matrices: np.ndarray) -> np.ndarray:
-    """``out[t] = m[0] @ m[1] @ ... @ m[t]`` (each rescaled), by recursive doubling."""
-    n = len(matrices)
+    """``out[:, :, t] = m[:, :, 0] @ ... @ m[:, :, t]`` (each rescaled), by recursive doubling.
+
+    ``matrices`` is ``(2, 2, T, ...)``, entry-major (see :func:`_product`).
+    """
+    n = matrices.shape[2]
     if n == 1:
         return matrices
-    odd = _prefix_products(_product(matrices[0 : n - 1 : 2], matrices[1:n:2]))
+    odd = _prefix_products(_product(matrices[:, :, 0 : n - 1 : 2], matrices[:, :, 1:n:2]))
     out = np.empty_like(matrices)
-    out[0] = matrices[0]
-    out[1::2] = odd
-    out[2::2] = _product(odd[: (n - 1) // 2], matrices[2::2])
+    out[:, :, 0] = matrices[:, :, 0]
+    out[:, :, 1::2] = odd
+    out[:, :, 2::2] = _product(odd[:, :, : (n - 1) // 2], matrices[:, :, 2::2])
     return out
 
 
@@ -99,25 +102,24 @@ def sign_posterior(log_odds: np.ndarray, flip_cost: np.ndarray) -> np.ndarray:
     if n_frames == 0:
         return np.zeros(log_odds.shape)
     half = 0.5 * np.nan_to_num(log_odds)
-    emission = np.stack([half, -half], axis=-1)                          # (T, K, 2)
-    flip = -np.broadcast_to(flip_cost, half.shape)
-    log_trans = np.stack([np.stack([np.zeros_like(flip), flip], -1),
-                          np.stack([flip, np.zeros_like(flip)], -1)], -2)  # (T, K, 2, 2)
-    log_step = log_trans + emission[..., None, :]
-    peak = np.abs(half)[..., None, None]            # the largest entry of each step
-    step = np.exp(log_step - peak)
-    start = np.exp(emission[0] - np.abs(half[0])[..., None])
-    forward = np.empty(emission.shape)
-    forward[0] = start
-    backward = np.ones(emission.shape)
+    peak = np.abs(half)                     # each step scaled to a largest entry of 1
+    flip = -np.broadcast_to(flip_cost, half.shape) - peak
+    # step[i, j, t]: from state i at frame t - 1 to state j at frame t (0: positive).
+    emission = np.exp(np.stack([half - peak, -half - peak]))
+    step = np.stack([np.stack([emission[0], np.exp(flip - half)]),
+                     np.stack([np.exp(flip + half), emission[1]])])       # (2, 2, T, K)
+    start = emission[:, 0]                                              # (2, K)
+    forward = np.empty((2,) + half.shape)
+    forward[:, 0] = start
+    backward = np.ones((2,) + half.shape)
     if n_frames > 1:
-        prefix = _prefix_products(step[1:])
-        forward[1:] = np.einsum("ki,tkij->tkj", start, prefix)
-        suffix = _prefix_products(np.swapaxes(step[:0:-1], -2, -1))[::-1]
-        backward[:-1] = np.sum(suffix, axis=-2)
+        prefix = _prefix_products(step[:, :, 1:])
+        forward[:, 1:] = start[0] * prefix[0] + start[1] * prefix[1]
+        suffix = _prefix_products(step[:, :, :0:-1].transpose(1, 0, 2, 3))[:, :, ::-1]
+        backward[:, :-1] = suffix[0] + suffix[1]
     with np.errstate(divide="ignore"):
         log_joint = np.log(forward) + np.log(backward)
-    return np.clip(log_joint[..., 0] - log_joint[..., 1], -MAX_LOG_ODDS, MAX_LOG_ODDS)
+    return np.clip(log_joint[0] - log_joint[1], -MAX_LOG_ODDS, MAX_LOG_ODDS)
 
 
 def smooth_scale(bounds: np.ndarray, percentile: float = SCALE_PERCENTILE,
