@@ -87,9 +87,10 @@ COUPLING_SIGMA_DEG = 25.0
 
 #: How far a finger's joints may go to the back of the palm plane, as a share of the
 #: finger's first bone below the palm: about sin 30° for a hyperextended MCP; the thumb
-#: stays in front of the palm.
+#: stays in front of the palm (on thesis21, where the thumb hangs from the palm fold, a
+#: margin of 0.2 let its first bone tilt behind the palm: clench 0.10 -> 0.076 cm).
 FINGER_DORSAL_MARGIN = 0.5
-THUMB_DORSAL_MARGIN = 0.2
+THUMB_DORSAL_MARGIN = 0.0
 
 #: Softness of that limit, as a share of the first bone.
 DORSAL_SOFTNESS = 0.1
@@ -128,6 +129,11 @@ HANDEDNESS = {"right": 1.0, "left": -1.0}
 def _unit(v: np.ndarray) -> np.ndarray:
     with np.errstate(invalid="ignore", divide="ignore"):
         return v / np.linalg.norm(v, axis=-1, keepdims=True)
+
+
+def _dot(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Dot product over the last axis (3 components), broadcasting the others."""
+    return a[..., 0] * b[..., 0] + a[..., 1] * b[..., 1] + a[..., 2] * b[..., 2]
 
 
 def _wrap(angle: np.ndarray) -> np.ndarray:
@@ -221,11 +227,11 @@ def finger_log_likelihood(candidates: FingerCandidates, bone_lengths: np.ndarray
     normal = HANDEDNESS[hand] * _unit(np.cross(anchors[:, :, 1] - wrist,
                                                anchors[:, :, 2] - wrist))[:, :, None]
     forward = anchors[:, :, 3:] - wrist[:, :, None]                      # (T, 2, F, 3)
-    base_height = np.sum(forward * normal, axis=-1)                      # (T, 2, F)
+    base_height = _dot(forward, normal)                                  # (T, 2, F)
     forward = _unit(forward - base_height[..., None] * normal)
     on_signs = (slice(None), slice(None), slice(None), None, None, None)
-    palmar = [np.sum(bone * normal[on_signs], axis=-1) for bone in candidates.bones]
-    ahead = [np.sum(bone * forward[on_signs], axis=-1) for bone in candidates.bones]
+    palmar = [_dot(bone, normal[on_signs]) for bone in candidates.bones]
+    ahead = [_dot(bone, forward[on_signs]) for bone in candidates.bones]
     phi = [np.arctan2(p, a) for p, a in zip(palmar, ahead, strict=True)]
     mcp, pip, dip = phi[0], _wrap(phi[1] - phi[0]), _wrap(phi[2] - phi[1])
     thumb = layout.is_thumb[:, None, None, None]
