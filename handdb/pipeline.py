@@ -36,6 +36,7 @@ from handdb.preview import write_preview_png
 from handdb.quarantine import Refusal
 from handdb.readers import ClipEntry, load_clip, tracks_2d_table, truth_3d_table
 from handdb.store import Store
+from handdb.subject_calibration import calibrated_bone_lengths
 from handdb.usd_export import export_clip_usd
 from handdb.validation import comparison_chart, markdown_summary, validation_table
 
@@ -198,31 +199,21 @@ def lift_clip(result: ClipResult, options: BuildOptions) -> ClipResult | Refusal
 
 def _fitted_bone_lengths(fit: MarkerFit, clip: Clip) -> BoneLengths:
     """The bone lengths of a marker fit, in clip units, with their source."""
-    skeleton, spec = clip.skeleton, clip.spec
-    mm_per_unit = METERS_PER_UNIT[spec.units] * 1000.0
+    spec = clip.spec
+    if fit.calibration is not None:
+        return calibrated_bone_lengths(fit.calibration, spec.units)
+    skeleton = clip.skeleton
     lengths = np.full(skeleton.n_joints, np.nan)
-    residuals = np.full(skeleton.n_joints, np.nan)
-    n_frames = np.zeros(skeleton.n_joints, dtype=np.int64)
-    child = skeleton.bones[:, 1]
-    lengths[child] = fit.model.bone_lengths / mm_per_unit
-    calibration = fit.calibration
-    if calibration is not None:
-        residuals[child] = calibration.residual / mm_per_unit
-        n_frames[child] = calibration.n_frames
-        detail = (f"Levenberg-Marquardt subject calibration over {len(calibration.frames)} "
-                  "marker frames with the X-ray ratio prior (Zhao et al. 2012, section 4)")
-        sources = ["calibrated"] * skeleton.n_joints
-        details = [detail] * skeleton.n_joints
-    else:
-        sources = ["given" if j in spec.bone_lengths else "anthropometric"
-                   for j in skeleton.joints]
-        details = [f"bone_lengths in {spec.path}" if j in spec.bone_lengths
-                   else "the hand model's template" for j in skeleton.joints]
-    root = skeleton.root
-    sources[root] = details[root] = None
-    return BoneLengths(skeleton=skeleton, units=spec.units, lengths=lengths,
-                       sources=tuple(sources), details=tuple(details), residuals=residuals,
-                       n_frames=n_frames)
+    lengths[skeleton.bones[:, 1]] = (fit.model.bone_lengths
+                                     / (METERS_PER_UNIT[spec.units] * 1000.0))
+    given = [j in spec.bone_lengths for j in skeleton.joints]
+    sources = tuple(None if j == skeleton.root else "given" if g else "anthropometric"
+                    for j, g in enumerate(given))
+    details = tuple(None if j == skeleton.root else f"bone_lengths in {spec.path}" if g
+                    else "the hand model's template" for j, g in enumerate(given))
+    return BoneLengths(skeleton=skeleton, units=spec.units, lengths=lengths, sources=sources,
+                       details=details, residuals=np.full(skeleton.n_joints, np.nan),
+                       n_frames=np.zeros(skeleton.n_joints, dtype=np.int64))
 
 
 def fit_marker_clip(result: ClipResult) -> ClipResult | Refusal:

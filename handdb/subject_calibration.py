@@ -24,10 +24,9 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-import pyarrow as pa
 from scipy.optimize import least_squares
 
-from handdb import tables
+from handdb.bone_lengths import BoneLengths
 from handdb.clip import METERS_PER_UNIT
 from handdb.fitting import SOLVER_TOLERANCE, fit_pose_lsq, initial_pose
 from handdb.kinematics import N_DOF, HandModel, forward_kinematics
@@ -267,34 +266,29 @@ def calibrate(model: HandModel, markers: np.ndarray, *, n_frames: int = CALIBRAT
                        n_frames=counts)
 
 
-def bone_length_table(clip_id: str, subject: str, calibration: Calibration,
-                      units: str) -> pa.Table:
-    """Rows of table ``bone_lengths`` for a calibration, source ``calibrated``.
+def calibrated_bone_lengths(calibration: Calibration, units: str) -> BoneLengths:
+    """The calibrated bone lengths in the clip's units, with source ``calibrated``.
 
     Parameters
     ----------
-    clip_id, subject
-        The clip and its subject.
     calibration
         The result of :func:`calibrate` (mm).
     units
-        The clip's length unit; lengths and residuals are written in it.
+        The clip's length unit; lengths and residuals are given in it.
     """
     mm_per_unit = METERS_PER_UNIT[units] * 1000.0
     skeleton = calibration.model.skeleton
-    bones = skeleton.bones
-    detail = (f"Levenberg-Marquardt over {len(calibration.frames)} frames, "
-              "X-ray ratio prior")
-    return tables.from_columns("bone_lengths", {
-        "subject": subject,
-        "clip_id": clip_id,
-        "bone": [skeleton.joints[c] for c in bones[:, 1]],
-        "parent": [skeleton.joints[p] for p in bones[:, 0]],
-        "finger": [skeleton.fingers[c] for c in bones[:, 1]],
-        "length": calibration.model.bone_lengths / mm_per_unit,
-        "units": units,
-        "source": CALIBRATED_SOURCE,
-        "detail": detail,
-        "residual": calibration.residual / mm_per_unit,
-        "n_frames": calibration.n_frames.astype(np.int32),
-    })
+    child = skeleton.bones[:, 1]
+    lengths = np.full(skeleton.n_joints, np.nan)
+    residuals = np.full(skeleton.n_joints, np.nan)
+    n_frames = np.zeros(skeleton.n_joints, dtype=np.int64)
+    lengths[child] = calibration.model.bone_lengths / mm_per_unit
+    residuals[child] = calibration.residual / mm_per_unit
+    n_frames[child] = calibration.n_frames
+    detail = (f"Levenberg-Marquardt subject calibration over {len(calibration.frames)} "
+              "marker frames with the X-ray ratio prior (Zhao et al. 2012, section 4)")
+    sources = [None if j == skeleton.root else CALIBRATED_SOURCE
+               for j in range(skeleton.n_joints)]
+    details = [None if source is None else detail for source in sources]
+    return BoneLengths(skeleton=skeleton, units=units, lengths=lengths, sources=tuple(sources),
+                       details=tuple(details), residuals=residuals, n_frames=n_frames)

@@ -1,7 +1,7 @@
 """Shared reading of long-form CSV files: one row per (frame, joint), named columns.
 
-Used by the canonical track format (``frame,joint,u,v[,confidence]``) and the
-ground-truth format (``frame,joint,x,y,z``).
+Used by the canonical track format (``frame,joint,u,v[,confidence]``) and the two 3D
+formats, ground truth and 3D markers (``frame,joint,x,y,z``).
 """
 
 from __future__ import annotations
@@ -9,6 +9,7 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
+import pyarrow as pa
 
 from handdb.clip import ClipSpec
 from handdb.errors import InputError
@@ -18,8 +19,14 @@ from handdb.readers.delimited import (
     read_bytes,
     read_delimited,
     split_header,
+    write_csv,
 )
-from handdb.readers.observations import resolve_joints, unknown_joint
+from handdb.readers.observations import (
+    Positions,
+    resolve_joints,
+    single_file_rows,
+    unknown_joint,
+)
 from handdb.skeletons import Skeleton
 
 
@@ -72,3 +79,52 @@ def joint_column(table: DelimitedTable, column: str, spec: ClipSpec,
         raise unknown_joint(str(table.path), names[codes[row]], spec, skeleton,
                             line=int(table.line[row]), field=column)
     return indices[codes]
+
+
+#: Columns of the long-form 3D formats (ground truth, 3D markers).
+POSITION_COLUMNS = ("frame", "joint", "x", "y", "z")
+
+
+def read_positions(path: str | Path, spec: ClipSpec, skeleton: Skeleton) -> Positions:
+    """Read a long-form 3D CSV file (``frame,joint,x,y,z``) into positions, clip units.
+
+    Raises
+    ------
+    InputError
+        Naming the line and column of the first bad cell: an unknown column, a frame
+        that is not a whole number or is negative, an unknown joint, an empty or
+        non-numeric coordinate, a joint given twice in a frame.
+    """
+    path = Path(path)
+    table = read_long_csv(path, POSITION_COLUMNS)
+    frame = table.frames("frame")
+    source, files = single_file_rows(path, table.n_rows)
+    return Positions(
+        frame=frame,
+        joint=joint_column(table, "joint", spec, skeleton),
+        xyz=np.stack([table.numbers(axis, allow_empty=False) for axis in "xyz"], axis=1),
+        line=table.line,
+        source=source,
+        files=files,
+        skeleton=skeleton,
+        n_frames=int(frame.max()) + 1,
+    )
+
+
+def write_positions(path: str | Path, xyz: np.ndarray, skeleton: Skeleton) -> None:
+    """Write a long-form 3D CSV file: one row per finite point.
+
+    Parameters
+    ----------
+    path
+        The file to write.
+    xyz
+        ``(T, J, 3) float64`` in the clip's units; NaN points get no row.
+    skeleton
+        The skeleton ordering the joint axis.
+    """
+    frame, joint = np.nonzero(np.isfinite(xyz).all(axis=-1))
+    columns = {"frame": pa.array(frame, pa.int64()),
+               "joint": pa.array(np.asarray(skeleton.joints)[joint])}
+    columns.update({axis: pa.array(xyz[frame, joint, k]) for k, axis in enumerate("xyz")})
+    write_csv(path, columns)

@@ -2,11 +2,12 @@ import numpy as np
 import pytest
 
 from handdb import tables
+from handdb.bone_lengths import bone_lengths_table
 from handdb.kinematics import forward_kinematics
 from handdb.subject_calibration import (
     CALIBRATED_SOURCE,
-    bone_length_table,
     calibrate,
+    calibrated_bone_lengths,
     measured_lengths,
     select_frames,
 )
@@ -73,7 +74,8 @@ def test_calibration_frames_are_rich_and_spread():
 
 
 def test_bone_length_rows_are_in_clip_units(calibration):
-    table = bone_length_table("clip", "s01", calibration, "cm")
+    skeleton = calibration.model.skeleton
+    table = bone_lengths_table("clip", "s01", skeleton, calibrated_bone_lengths(calibration, "cm"))
     assert table.schema.equals(tables.schema("bone_lengths"))
     assert table.num_rows == 20
     assert set(table.column("source").to_pylist()) == {CALIBRATED_SOURCE}
