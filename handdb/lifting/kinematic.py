@@ -113,7 +113,7 @@ PLANE_RIDGE = 1e-9
 SCALE_RANK = 2
 
 #: Smallest spread of a bone's frame-to-frame depth change, as a share of its length.
-TEMPORAL_FLOOR = 0.05
+TEMPORAL_FLOOR = 0.02
 
 #: The clip-wide mirror counts as settled when it is this many times less likely.
 MIRROR_SETTLED_ODDS = 20.0
