@@ -14,6 +14,15 @@ from handdb.clip import Camera
 from handdb.skeletons import Skeleton
 
 
+def dot3(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Dot product of 3-vectors over the last axis, broadcasting the others.
+
+    Written out component by component: a reduction over an axis of length 3 costs several
+    times more.
+    """
+    return a[..., 0] * b[..., 0] + a[..., 1] * b[..., 1] + a[..., 2] * b[..., 2]
+
+
 def bone_vectors_2d(uv: np.ndarray, skeleton: Skeleton) -> np.ndarray:
     """Image vector from each joint's parent to the joint.
 

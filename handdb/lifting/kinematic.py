@@ -48,6 +48,7 @@ from handdb.lifting.geometry import (
     accumulate_depths,
     centred_pixels,
     depth_magnitudes,
+    dot3,
     eq6_scale,
     orthographic_points,
     path_matrix,
@@ -129,11 +130,6 @@ HANDEDNESS = {"right": 1.0, "left": -1.0}
 def _unit(v: np.ndarray) -> np.ndarray:
     with np.errstate(invalid="ignore", divide="ignore"):
         return v / np.linalg.norm(v, axis=-1, keepdims=True)
-
-
-def _dot(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """Dot product over the last axis (3 components), broadcasting the others."""
-    return a[..., 0] * b[..., 0] + a[..., 1] * b[..., 1] + a[..., 2] * b[..., 2]
 
 
 def _wrap(angle: np.ndarray) -> np.ndarray:
@@ -227,11 +223,11 @@ def finger_log_likelihood(candidates: FingerCandidates, bone_lengths: np.ndarray
     normal = HANDEDNESS[hand] * _unit(np.cross(anchors[:, :, 1] - wrist,
                                                anchors[:, :, 2] - wrist))[:, :, None]
     forward = anchors[:, :, 3:] - wrist[:, :, None]                      # (T, 2, F, 3)
-    base_height = _dot(forward, normal)                                  # (T, 2, F)
+    base_height = dot3(forward, normal)                                  # (T, 2, F)
     forward = _unit(forward - base_height[..., None] * normal)
     on_signs = (slice(None), slice(None), slice(None), None, None, None)
-    palmar = [_dot(bone, normal[on_signs]) for bone in candidates.bones]
-    ahead = [_dot(bone, forward[on_signs]) for bone in candidates.bones]
+    palmar = [dot3(bone, normal[on_signs]) for bone in candidates.bones]
+    ahead = [dot3(bone, forward[on_signs]) for bone in candidates.bones]
     phi = [np.arctan2(p, a) for p, a in zip(palmar, ahead, strict=True)]
     mcp, pip, dip = phi[0], _wrap(phi[1] - phi[0]), _wrap(phi[2] - phi[1])
     thumb = layout.is_thumb[:, None, None, None]

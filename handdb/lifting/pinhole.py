@@ -18,7 +18,7 @@ from __future__ import annotations
 import numpy as np
 
 from handdb.clip import Camera
-from handdb.lifting.geometry import intrinsics
+from handdb.lifting.geometry import dot3, intrinsics
 from handdb.lifting.temporal import smooth_scale
 from handdb.skeletons import Skeleton
 
@@ -72,10 +72,10 @@ def ray_roots(origin: np.ndarray, ray: np.ndarray,
     excess
         ``(...) float64`` >= 0, clip units: by how much the ray misses the sphere.
     """
-    a = np.sum(ray * ray, axis=-1)
-    b = np.sum(ray * origin, axis=-1)
+    a = dot3(ray, ray)
+    b = dot3(ray, origin)
     nearest = b / a
-    miss_sq = np.clip(np.sum(origin * origin, axis=-1) - b * nearest, 0.0, None)
+    miss_sq = np.clip(dot3(origin, origin) - b * nearest, 0.0, None)
     half_chord = np.sqrt(np.clip(length**2 - miss_sq, 0.0, None) / a)
     far = ray * (nearest + half_chord)[..., None]
     near = ray * (nearest - half_chord)[..., None]
@@ -109,20 +109,23 @@ def walk_rays(rays: np.ndarray, root_depth: np.ndarray, skeleton: Skeleton,
         ``(T, J) float64`` >= 0, clip units: how much farther than its bone length the ray
         passes from the parent (0 at the root).
     """
-    xyz = np.empty(rays.shape)
-    inconsistency = np.zeros(rays.shape[:2])
-    xyz[:, skeleton.root] = rays[:, skeleton.root] * root_depth[:, None]
+    # Joint-major copies, so that each joint's frames are one contiguous block.
+    joint_rays = np.ascontiguousarray(np.swapaxes(rays, 0, 1))           # (J, T, 3)
+    joint_dz = np.ascontiguousarray(bone_dz.T)                           # (J, T)
+    xyz = np.empty(joint_rays.shape)
+    inconsistency = np.zeros(joint_dz.shape)
+    xyz[skeleton.root] = joint_rays[skeleton.root] * root_depth[:, None]
     for joint in range(skeleton.n_joints):
         parent = skeleton.parents[joint]
         if parent < 0:
             continue
-        origin = xyz[:, parent]
-        far, near, excess = ray_roots(origin, rays[:, joint], bone_lengths[joint])
-        wanted = origin[:, 2] + bone_dz[:, joint]
+        origin = xyz[parent]
+        far, near, excess = ray_roots(origin, joint_rays[joint], bone_lengths[joint])
+        wanted = origin[:, 2] + joint_dz[joint]
         pick_far = np.abs(far[:, 2] - wanted) <= np.abs(near[:, 2] - wanted)
-        xyz[:, joint] = np.where(pick_far[:, None], far, near)
-        inconsistency[:, joint] = excess
-    return xyz, inconsistency
+        xyz[joint] = np.where(pick_far[:, None], far, near)
+        inconsistency[joint] = excess
+    return np.swapaxes(xyz, 0, 1), inconsistency.T
 
 
 def deepest_feasible_root(rays: np.ndarray, guess: np.ndarray, skeleton: Skeleton,
