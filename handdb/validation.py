@@ -12,20 +12,23 @@ from __future__ import annotations
 import io
 from collections.abc import Mapping
 
-import matplotlib
+import numpy as np
+import pyarrow as pa
+from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.figure import Figure
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-import pyarrow as pa  # noqa: E402
-
-from handdb import tables  # noqa: E402
-from handdb.clip import METERS_PER_UNIT  # noqa: E402
-from handdb.lifting.result import LiftResult  # noqa: E402
-from handdb.skeletons import Skeleton  # noqa: E402
+from handdb import tables
+from handdb.clip import METERS_PER_UNIT
+from handdb.lifting.result import LiftResult
+from handdb.skeletons import Skeleton
 
 #: Bones whose true depth span is below this are left out of the sign accuracy, metres.
 SIGN_THRESHOLD_M = 0.005
+
+#: Comparison chart: size (inches), resolution and fixed margins (fractions of the figure).
+_CHART_INCHES = (12.0, 4.0)
+_CHART_DPI = 100
+_CHART_MARGINS = {"left": 0.06, "right": 0.99, "bottom": 0.25, "top": 0.92}
 
 
 def _xyz(estimate: LiftResult | np.ndarray) -> np.ndarray:
@@ -187,13 +190,34 @@ def markdown_summary(clip_id: str, table: pa.Table) -> str:
 
 
 def comparison_chart(clip_id: str, table: pa.Table, skeleton: Skeleton) -> bytes:
-    """Draw a PNG bar chart of mean ``|ΔZ|`` per joint and method for one clip."""
+    """Draw a PNG bar chart of mean ``|ΔZ|`` per joint and method for one clip.
+
+    Drawn on a :class:`~matplotlib.figure.Figure` with the Agg canvas and a fixed layout
+    (no pyplot state), so charts can be made from worker threads at once.
+
+    Parameters
+    ----------
+    clip_id
+        The clip, for the title.
+    table
+        Its ``validation_joint`` rows (see :func:`validation_table`).
+    skeleton
+        Orders the joints along the x axis.
+
+    Returns
+    -------
+    bytes
+        The PNG file's content.
+    """
     rows = table.to_pylist()
     methods = list(dict.fromkeys(r["method"] for r in rows))
     values = {(r["method"], r["joint"]): r["dz_mean"] for r in rows}
     x = np.arange(skeleton.n_joints)
     width = 0.8 / max(len(methods), 1)
-    figure, axes = plt.subplots(figsize=(12, 4))
+    figure = Figure(figsize=_CHART_INCHES, dpi=_CHART_DPI)
+    FigureCanvasAgg(figure)
+    figure.subplots_adjust(**_CHART_MARGINS)
+    axes = figure.add_subplot()
     for k, method in enumerate(methods):
         heights = [np.nan if values.get((method, joint)) is None else values[(method, joint)]
                    for joint in skeleton.joints]
@@ -203,8 +227,6 @@ def comparison_chart(clip_id: str, table: pa.Table, skeleton: Skeleton) -> bytes
     axes.set_ylabel(f"mean |ΔZ| root-relative ({units})")
     axes.set_title(f"{clip_id}: depth error per joint")
     axes.legend()
-    figure.tight_layout()
     buffer = io.BytesIO()
-    figure.savefig(buffer, format="png", dpi=100)
-    plt.close(figure)
+    figure.savefig(buffer, format="png")
     return buffer.getvalue()
