@@ -17,7 +17,8 @@ signs are then chosen in three steps:
 3. **Time.** A sign can only change while its bone crosses the image plane, at a local
    minimum of ``|dZ|`` over time; between two minima the evidence of every frame is pooled
    (:mod:`handdb.lifting.temporal`). The palm's tilt is pooled the same way, its evidence
-   being the fingers' likelihood under each tilt.
+   being the fingers' likelihood under each tilt, each finger's say in a frame capped
+   (``FINGER_VOTE_CAP``) so that one finger the prior fits badly cannot flip the palm.
 
 The confidence of each bone's sign is its pooled posterior, discounted by the probability
 that the whole clip is mirrored: flipping every sign at once changes only the

@@ -101,7 +101,9 @@ def sign_posterior(log_odds: np.ndarray, flip_cost: np.ndarray) -> np.ndarray:
     n_frames = len(log_odds)
     if n_frames == 0:
         return np.zeros(log_odds.shape)
-    half = 0.5 * np.nan_to_num(log_odds)
+    # One frame is never surer than MAX_LOG_ODDS: unbounded evidence (a state of zero
+    # likelihood) would let consecutive steps annihilate and the scan divide 0 by 0.
+    half = 0.5 * np.clip(np.nan_to_num(log_odds), -MAX_LOG_ODDS, MAX_LOG_ODDS)
     peak = np.abs(half)                     # each step scaled to a largest entry of 1
     flip = -np.broadcast_to(flip_cost, half.shape) - peak
     # step[i, j, t]: from state i at frame t - 1 to state j at frame t (0: positive).
