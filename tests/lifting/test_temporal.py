@@ -53,3 +53,10 @@ def test_smooth_scale_ignores_an_outlier_frame_and_fills_gaps():
     bounds[60:63] = np.nan
     scale = smooth_scale(bounds)
     np.testing.assert_allclose(scale, 2.0, atol=1e-9)
+
+
+def test_certain_frames_that_disagree_still_give_finite_posteriors():
+    log_odds = np.array([[np.inf], [-np.inf], [np.inf]])
+    posterior = sign_posterior(log_odds, np.full((3, 1), 1e4))
+    # a flip costs far more than any frame's evidence: two certain frames outvote one
+    assert np.all(np.isfinite(posterior)) and np.all(posterior > 0)
