@@ -201,7 +201,7 @@ def time_clip_stages(entry: Any, inbox: Path, store: Any, ratios: pa.Table,
         "bone lengths": lambda r: pipeline.resolve_bone_lengths(r, ratios),
         "gap fill": lambda r: pipeline.fill(r, options),
         "lift": lambda r: pipeline.lift_clip(r, options),
-        "validate": pipeline.validate,
+        "validate": lambda r: pipeline.validate(r, options),
         "export": lambda r: pipeline.export(r, store, options),
         "commit": lambda r: store.commit_clip(r.clip.clip_id, pipeline.clip_tables(r, inbox)),
     }
