@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import json
 import shutil
+from collections.abc import Callable
 from dataclasses import dataclass
 from importlib.resources import files
 from pathlib import Path
@@ -67,6 +68,14 @@ DEMO_CLIPS: tuple[DemoClip, ...] = (
 )
 
 
+def _writer(format_name: str) -> Callable[..., None]:
+    """The writer of a registered input format (every format the demo uses has one)."""
+    write = get_format(format_name).write
+    if write is None:
+        raise ValueError(f"input format '{format_name}' has no writer")
+    return write
+
+
 def hide_points(uv: np.ndarray, n_gaps: int, rng: np.random.Generator,
                 max_length: int = 25) -> np.ndarray:
     """A copy of ``uv`` (T, J, 2) with ``n_gaps`` runs of 1..``max_length`` frames hidden.
@@ -101,21 +110,22 @@ def _write(inbox: Path, clip_id: str, clip: SyntheticClip, sidecar: dict, track_
            uv: np.ndarray, confidence: np.ndarray | None, *, truth: bool) -> list[Path]:
     skeleton = load_skeleton(clip.skeleton)
     fmt = get_format(track_format)
+    write = _writer(track_format)
     sidecar_path = inbox / f"{clip_id}.clip.json"
     sidecar_path.write_text(json.dumps(sidecar, indent=1))
     track_path = inbox / f"{clip_id}{fmt.suffix}"
     if track_format == "openpose":
-        fmt.write(track_path, uv, confidence, skeleton, hand=clip.hand)
+        write(track_path, uv, confidence, skeleton, hand=clip.hand)
     elif track_format == "mediapipe":
-        fmt.write(track_path, uv, confidence, skeleton, image_size=clip.image_size)
+        write(track_path, uv, confidence, skeleton, image_size=clip.image_size)
     elif track_format == "maya":
-        fmt.write(track_path, clip.xyz, skeleton)
+        write(track_path, clip.xyz, skeleton)
     else:
-        fmt.write(track_path, uv, confidence, skeleton)
+        write(track_path, uv, confidence, skeleton)
     written = [sidecar_path, track_path]
     if truth and track_format != "maya":
         truth_path = inbox / f"{clip_id}.truth.csv"
-        get_format("truth_csv").write(truth_path, clip.xyz, skeleton)
+        _writer("truth_csv")(truth_path, clip.xyz, skeleton)
         written.append(truth_path)
     return written
 
@@ -138,9 +148,9 @@ def _write_marker_clip(inbox: Path, clip_id: str, n_frames: int, seed: int) -> l
     sidecar_path = inbox / f"{clip_id}.clip.json"
     sidecar_path.write_text(json.dumps(sidecar, indent=1))
     marker_path = inbox / f"{clip_id}{get_format('markers_csv').suffix}"
-    get_format("markers_csv").write(marker_path, markers, skeleton)
+    _writer("markers_csv")(marker_path, markers, skeleton)
     truth_path = inbox / f"{clip_id}.truth.csv"
-    get_format("truth_csv").write(truth_path, clip.xyz, skeleton)
+    _writer("truth_csv")(truth_path, clip.xyz, skeleton)
     return [sidecar_path, marker_path, truth_path]
 
 

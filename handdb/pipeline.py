@@ -16,7 +16,7 @@ import tempfile
 from dataclasses import asdict, dataclass, replace
 from functools import cache
 from pathlib import Path
-from typing import Any
+from typing import Any, TypeVar
 
 import numpy as np
 import pyarrow as pa
@@ -24,7 +24,7 @@ import pyarrow as pa
 from handdb import __version__, tables, xray  # noqa: F401  (xray registers its inbox format)
 from handdb.bone_lengths import BoneLengths, bone_lengths_table, clip_bone_lengths
 from handdb.clip import METERS_PER_UNIT, Clip
-from handdb.errors import BoneLengthError, InputError
+from handdb.errors import BoneLengthError, InputError, StageError
 from handdb.gapfill import DEFAULT_METHOD as DEFAULT_GAP_FILL
 from handdb.gapfill import FillResult, UnknownMethodError, fill_gaps
 from handdb.lifting import DEFAULT_METHOD as DEFAULT_LIFT
@@ -123,6 +123,16 @@ class ClipResult:
         return np.where(self.clip.observed[..., None], self.clip.uv, np.nan)
 
 
+T = TypeVar("T")
+
+
+def _stage_output(value: T | None, stage: str, result: ClipResult) -> T:
+    """Return what an earlier stage produced, or raise if that stage has not run."""
+    if value is None:
+        raise StageError(f"clip '{result.clip.clip_id}': the {stage} stage has not run")
+    return value
+
+
 def _refuse(error: Exception, result: ClipResult, field: str | None = None) -> Refusal:
     spec = result.clip.spec
     if isinstance(error, InputError):
@@ -190,7 +200,8 @@ def lift_clip(result: ClipResult, options: BuildOptions) -> ClipResult | Refusal
         return _refuse(ValueError(f"unknown lifting method '{method}'; known: "
                                   f"{', '.join(available_methods())}"), result, field="lift")
     try:
-        lifted = lift(result.uv, clip.skeleton, result.bones.lengths, clip.spec.camera,
+        bones = _stage_output(result.bones, "bone lengths", result)
+        lifted = lift(result.uv, clip.skeleton, bones.lengths, clip.spec.camera,
                       method=method, hand=clip.spec.hand, **params)
     except (TypeError, ValueError) as error:
         return _refuse(error, result, field="lift")
@@ -223,13 +234,14 @@ def fit_marker_clip(result: ClipResult) -> ClipResult | Refusal:
     The sidecar's ``lift`` parameters go to :func:`handdb.markerfit.fit_markers`.
     """
     clip, spec = result.clip, result.clip.spec
+    markers = _stage_output(clip.markers, "marker ingest", result)
     if spec.skeleton != MARKER_SKELETON:
         return _refuse(ValueError(f"marker clips use the {MARKER_SKELETON} marker set (the "
                                   f"21 markers of Zhao et al.), not '{spec.skeleton}'"),
                        result, field="skeleton")
     params = {k: v for k, v in spec.lift.items() if k != "method"}
     try:
-        fit = fit_markers(clip.markers, hand=spec.hand, units=spec.units,
+        fit = fit_markers(markers, hand=spec.hand, units=spec.units,
                           bone_lengths=spec.bone_lengths or None, **params)
     except (TypeError, ValueError) as error:
         return _refuse(error, result, field="lift")
@@ -245,11 +257,13 @@ def validate(result: ClipResult, options: BuildOptions) -> ClipResult:
     clip = result.clip
     if clip.truth is None:
         return result
-    estimates = {result.lifted.method: result.lifted}
+    lifted = _stage_output(result.lifted, "lift", result)
+    bones = _stage_output(result.bones, "bone lengths", result)
+    estimates: dict[str, LiftResult | np.ndarray] = {lifted.method: lifted}
     methods = (*VALIDATED_METHODS, *options.compare) if clip.markers is None else ()
     for method in methods:
         if method not in estimates:
-            estimates[method] = lift(result.uv, clip.skeleton, result.bones.lengths,
+            estimates[method] = lift(result.uv, clip.skeleton, bones.lengths,
                                      clip.spec.camera, method=method, hand=clip.spec.hand)
     table = validation_table(clip.clip_id, clip.truth, estimates, clip.skeleton, clip.spec.units)
     return replace(result, validation=table, report=markdown_summary(clip.clip_id, table))
@@ -275,7 +289,9 @@ def export(result: ClipResult, store: Store, options: BuildOptions) -> ClipResul
 
     A clip with joints that could not be lifted is not exported (``usd_path`` stays null).
     """
-    clip, lifted = result.clip, result.lifted
+    clip = result.clip
+    lifted = _stage_output(result.lifted, "lift", result)
+    bones = _stage_output(result.bones, "bone lengths", result)
     if not options.export_usd or not np.isfinite(lifted.xyz).all():
         return result
     spec = clip.spec
@@ -284,7 +300,7 @@ def export(result: ClipResult, store: Store, options: BuildOptions) -> ClipResul
         rotations = joint_motion(result.fit, spec.units) if result.fit is not None else None
         usd = export_clip_usd(scratch_dir / f"{clip.clip_id}.usd", clip_id=clip.clip_id,
                               skeleton=clip.skeleton, xyz=lifted.xyz,
-                              bone_lengths=result.bones.lengths, fps=spec.fps,
+                              bone_lengths=bones.lengths, fps=spec.fps,
                               units=spec.units, hand=spec.hand, rotations=rotations)
         usd_path = _put(store, usd, USD_DIR, usd.name)
         preview = write_preview_png(scratch_dir / "preview.png", skeleton=clip.skeleton,
