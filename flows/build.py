@@ -110,34 +110,26 @@ def ingest(entry: Any, clip_id: str, key: str) -> Outcome:
 @task(name="bone-lengths", task_run_name="bone lengths {clip_id}", cache_policy=NO_CACHE)
 def bone_lengths(result: Outcome, clip_id: str, ratios: pa.Table | None) -> Outcome:
     """Give every bone of the clip a length."""
-    if isinstance(result, Refusal):
-        return result
     return pipeline.resolve_bone_lengths(result, ratios)
 
 
 @task(name="gap-fill", task_run_name="gap fill {clip_id}", cache_policy=NO_CACHE)
 def gap_fill(result: Outcome, clip_id: str, options: pipeline.BuildOptions) -> Outcome:
     """Fill the clip's missing 2D points."""
-    if isinstance(result, Refusal):
-        return result
     return pipeline.fill(result, options)
 
 
 @task(name="lift", task_run_name="lift {clip_id}", cache_policy=NO_CACHE)
 def lift(result: Outcome, clip_id: str, options: pipeline.BuildOptions) -> Outcome:
     """Give every joint of every frame its depth."""
-    if isinstance(result, Refusal):
-        return result
     return pipeline.lift_clip(result, options)
 
 
 @task(name="validate", task_run_name="validate {clip_id}", cache_policy=NO_CACHE)
 def validate(result: Outcome, clip_id: str, options: pipeline.BuildOptions) -> Outcome:
     """Compare lifting methods against ground truth; publish the comparison."""
-    if isinstance(result, Refusal):
-        return result
     result = pipeline.validate(result, options)
-    if result.report is not None:
+    if isinstance(result, pipeline.ClipResult) and result.report is not None:
         create_markdown_artifact(markdown=result.report, key=artifact_key("validation", clip_id),
                                  description=f"depth validation of clip {clip_id}")
     return result
@@ -146,8 +138,6 @@ def validate(result: Outcome, clip_id: str, options: pipeline.BuildOptions) -> O
 @task(name="export", task_run_name="export {clip_id}", cache_policy=NO_CACHE, **IO_RETRIES)
 def export(result: Outcome, clip_id: str, db: str, options: pipeline.BuildOptions) -> Outcome:
     """Write the clip's USD animation and preview images."""
-    if isinstance(result, Refusal):
-        return result
     return pipeline.export(result, Store(db), options)
 
 

@@ -13,10 +13,11 @@ import hashlib
 import json
 import shutil
 import tempfile
+from collections.abc import Callable
 from dataclasses import asdict, dataclass, replace
-from functools import cache
+from functools import cache, wraps
 from pathlib import Path
-from typing import Any, TypeVar
+from typing import Any, Concatenate, ParamSpec, TypeVar
 
 import numpy as np
 import pyarrow as pa
@@ -124,6 +125,24 @@ class ClipResult:
 
 
 T = TypeVar("T")
+P = ParamSpec("P")
+
+
+def passes_refusals(
+    stage: Callable[Concatenate[ClipResult, P], T],
+) -> Callable[Concatenate[ClipResult | Refusal, P], T | Refusal]:
+    """Let a stage take a refused clip and hand the refusal on untouched.
+
+    A clip refused by an earlier stage goes down the rest of the chain unchanged, so it
+    ends in the ``quarantine`` table with the reason the first refusing stage gave.
+    """
+    @wraps(stage)
+    def run(result: ClipResult | Refusal, *args: P.args, **kwargs: P.kwargs) -> T | Refusal:
+        if isinstance(result, Refusal):
+            return result
+        return stage(result, *args, **kwargs)
+
+    return run
 
 
 def _stage_output(value: T | None, stage: str, result: ClipResult) -> T:
@@ -158,6 +177,7 @@ def ingest(entry: ClipEntry, key: str) -> ClipResult | Refusal:
     return ClipResult(clip=clip, build_key=key)
 
 
+@passes_refusals
 def resolve_bone_lengths(result: ClipResult, ratios: pa.Table | None) -> ClipResult | Refusal:
     """Give every bone of the clip a length, or refuse the clip when none can be had.
 
@@ -174,6 +194,7 @@ def resolve_bone_lengths(result: ClipResult, ratios: pa.Table | None) -> ClipRes
     return replace(result, bones=bones)
 
 
+@passes_refusals
 def fill(result: ClipResult, options: BuildOptions) -> ClipResult | Refusal:
     """Fill the clip's missing 2D points with the chosen gap-filling method.
 
@@ -190,6 +211,7 @@ def fill(result: ClipResult, options: BuildOptions) -> ClipResult | Refusal:
     return replace(result, fill=filled)
 
 
+@passes_refusals
 def lift_clip(result: ClipResult, options: BuildOptions) -> ClipResult | Refusal:
     """Lift the filled 2D points to 3D with the chosen method (marker clips: fit them)."""
     clip = result.clip
@@ -252,6 +274,7 @@ def fit_marker_clip(result: ClipResult) -> ClipResult | Refusal:
     return replace(result, fit=fit, lifted=lifted, bones=_fitted_bone_lengths(fit, clip))
 
 
+@passes_refusals
 def validate(result: ClipResult, options: BuildOptions) -> ClipResult:
     """Compare the lifting methods against the clip's ground truth, if it has any."""
     clip = result.clip
@@ -284,6 +307,7 @@ def _put(store: Store, local: Path, *parts: str) -> str:
     return "/".join(parts)
 
 
+@passes_refusals
 def export(result: ClipResult, store: Store, options: BuildOptions) -> ClipResult:
     """Write the clip's USD animation, preview sheet and validation chart into the database.
 
