@@ -33,7 +33,7 @@ from handdb.gapfill.lowrank import DEFAULT_VARIANCE, blend_to_edges, lowrank_rec
 from handdb.gapfill.palm_frame import palm_motion, to_image, to_palm_frame
 from handdb.gapfill.refine import refine_bone_lengths
 from handdb.gapfill.registry import OFFLINE, MethodOutput, register
-from handdb.gapfill.regression import regression_fill
+from handdb.gapfill.regression import Samples, regression_estimates, regression_samples
 from handdb.gapfill.rigid import carry_along_chains, palm_joints, place_from_rest_pose
 from handdb.skeletons import Skeleton
 
@@ -47,6 +47,9 @@ LONG_GAP_RULES = (*ESTIMATES, "validated")
 #: The estimates weighed by ``"validated"``.
 VALIDATED_ESTIMATES = ("chain", "regression")
 
+#: The labels of the points ``auto`` fills, by the rule that filled them.
+RULE_LABELS = ("rigid", "pchip", *LONG_GAP_RULES, "rest-pose")
+
 #: Observed runs per joint hidden to weigh the long-gap estimates against each other.
 VALIDATION_GAPS = 3
 
@@ -54,36 +57,50 @@ VALIDATION_GAPS = 3
 def estimate_long_gaps(
     estimates: tuple[str, ...], local: np.ndarray, filled: np.ndarray, missing: np.ndarray,
     gaps: Gaps, skeleton: Skeleton, variance: float = DEFAULT_VARIANCE,
+    samples: Samples | None = None,
 ) -> list[np.ndarray]:
-    """Fill long finger ``gaps`` by each of ``estimates`` (names from :data:`ESTIMATES`).
+    """Estimate the points of long finger ``gaps`` by each of ``estimates``.
 
     Parameters
     ----------
     estimates
-        ``"chain"`` (:func:`~handdb.gapfill.rigid.carry_along_chains`), ``"regression"``
-        (:func:`~handdb.gapfill.regression.regression_fill` on the finger joints, the chain
-        where it cannot) and ``"lowrank"`` (:mod:`handdb.gapfill.lowrank`).
+        Names from :data:`ESTIMATES`: ``"chain"``
+        (:func:`~handdb.gapfill.rigid.carry_along_chains`), ``"regression"``
+        (:func:`~handdb.gapfill.regression.regression_estimates` on the finger joints, the
+        chain where it cannot) and ``"lowrank"`` (:mod:`handdb.gapfill.lowrank`).
     local
-        ``(T, J, 2)`` tracks in the palm frame, NaN where missing.
+        ``(T, J, 2)`` tracks in the palm frame, NaN where missing (read by ``"lowrank"``).
     filled
-        ``local`` with the palm points and short gaps already filled.
+        ``local`` with the palm points and every gap filled by interpolation; only the
+        points that ``missing`` leaves observed, and the filled palm points, are read.
     missing, gaps, skeleton, variance
         The missing points, the gaps to fill, the skeleton, the low-rank variance share.
+    samples
+        The regression's samples of ``filled`` (:func:`finger_samples`), gathered with
+        ``missing`` or fewer points missing; gathered here when ``None``.
 
     Returns
     -------
     list of numpy.ndarray
-        ``(T, J, 2)`` each: ``filled`` with ``gaps`` filled by each estimate, in order.
+        ``(N, 2) float64`` each: the estimates at the points of ``gaps.frames()``, in order.
     """
-    chain = carry_along_chains(filled, missing, gaps, skeleton)
+    _, frame, joint = gaps.frames()
+    chain = carry_along_chains(filled, missing, gaps, skeleton)[frame, joint]
     results = {"chain": chain}
     if "regression" in estimates:
-        regressed = regression_fill(filled, missing, gaps, ~palm_joints(skeleton))
+        if samples is None:
+            samples = finger_samples(filled, missing, skeleton)
+        regressed = regression_estimates(samples, missing, gaps, ~palm_joints(skeleton))
         results["regression"] = np.where(np.isnan(regressed), chain, regressed)
     if "lowrank" in estimates:
         model = lowrank_reconstruct(local, missing, variance=variance)
-        results["lowrank"] = blend_to_edges(filled, model, gaps)
+        results["lowrank"] = blend_to_edges(filled, model, gaps)[frame, joint]
     return [results[name] for name in estimates]
+
+
+def finger_samples(filled: np.ndarray, missing: np.ndarray, skeleton: Skeleton) -> Samples:
+    """The regression's samples of the joints that are not palm points (its predictors)."""
+    return regression_samples(filled, missing, np.flatnonzero(~palm_joints(skeleton)))
 
 
 def validation_mask(missing: np.ndarray, gaps: Gaps, seed: int = 0) -> np.ndarray:
@@ -116,27 +133,26 @@ def _long_gap_fill(
     local: np.ndarray, filled: np.ndarray, missing: np.ndarray, gaps: Gaps,
     skeleton: Skeleton, rule: str, variance: float,
 ) -> np.ndarray:
+    _, frame, joint = gaps.frames()
+    blended = filled.copy()
     if rule != "validated":
-        return estimate_long_gaps((rule,), local, filled, missing, gaps, skeleton, variance)[0]
+        blended[frame, joint] = estimate_long_gaps((rule,), local, filled, missing, gaps,
+                                                   skeleton, variance)[0]
+        return blended
+    samples = finger_samples(filled, missing, skeleton)
     hidden = validation_mask(missing, gaps)
-    trial_missing = missing | hidden
-    trial_local = np.where(hidden[..., None], np.nan, local)
-    trial_filled = np.where(hidden[..., None], np.nan, filled)
-    trials = estimate_long_gaps(VALIDATED_ESTIMATES, trial_local, trial_filled, trial_missing,
-                                find_gaps(hidden), skeleton, variance)
-    frame, joint = np.nonzero(hidden)
-    errors = np.array([
-        np.bincount(joint, np.sum((trial[frame, joint] - local[frame, joint]) ** 2, axis=-1),
-                    minlength=missing.shape[1])
-        for trial in trials])
+    runs = find_gaps(hidden)
+    trials = estimate_long_gaps(VALIDATED_ESTIMATES, local, filled, missing | hidden, runs,
+                                skeleton, variance, samples)
+    _, hidden_frame, hidden_joint = runs.frames()
+    truth = local[hidden_frame, hidden_joint]
+    errors = np.array([np.bincount(hidden_joint, np.sum((trial - truth) ** 2, axis=-1),
+                                   minlength=missing.shape[1]) for trial in trials])
     inverse = 1.0 / np.maximum(errors, np.finfo(float).tiny)
     weights = np.where(hidden.any(axis=0), inverse / inverse.sum(axis=0), 1.0 / len(trials))
     estimates = estimate_long_gaps(VALIDATED_ESTIMATES, local, filled, missing, gaps, skeleton,
-                                   variance)
-    _, frame, joint = gaps.frames()
-    blended = filled.copy()
-    blended[frame, joint] = np.sum(
-        weights[:, joint, None] * np.stack([e[frame, joint] for e in estimates]), axis=0)
+                                   variance, samples)
+    blended[frame, joint] = np.sum(weights[:, joint, None] * np.stack(estimates), axis=0)
     return blended
 
 
@@ -192,7 +208,7 @@ def fill_auto(
     if motion is not None:
         filled = to_image(filled, motion)
 
-    labels = np.full(missing.shape, "", dtype=object)
+    labels = np.zeros(missing.shape, dtype=f"<U{max(map(len, RULE_LABELS))}")
     for rule, chosen in (("rigid", partial & palm), ("pchip", partial & ~palm & short),
                          (long_gaps, by_model), ("rest-pose", gaps.whole_clip)):
         _, frame, joint = gaps.select(chosen).frames()

@@ -94,9 +94,9 @@ def find_gaps(missing: np.ndarray) -> Gaps:
         The gaps, ordered by joint, then by start frame.
     """
     missing = np.asarray(missing, dtype=bool)
-    by_joint = np.pad(missing.T, ((0, 0), (1, 1))).astype(np.int8)
-    edges = np.diff(by_joint, axis=1)
-    joint, start = np.nonzero(edges == 1)
-    _, stop = np.nonzero(edges == -1)
-    return Gaps(joint.astype(np.int64), start.astype(np.int64), stop.astype(np.int64),
-                int(missing.shape[0]))
+    n_frames, n_joints = missing.shape
+    by_joint = np.zeros((n_joints, n_frames + 2), dtype=bool)
+    by_joint[:, 1:-1] = missing.T
+    # Each joint's row starts and ends unmissing, so its changes alternate start, stop.
+    joint, frame = np.divmod(np.flatnonzero(by_joint[:, 1:] != by_joint[:, :-1]), n_frames + 1)
+    return Gaps(joint[::2], frame[::2], frame[1::2], int(n_frames))

@@ -67,8 +67,9 @@ class MethodOutput:
         ``(T, J, 2) float64``, pixels: the tracks with the missing points filled, NaN where
         the method could not fill.
     labels
-        ``(T, J)`` str: the name of the rule that filled each point, for methods that
-        combine several; ``None`` to label every filled point with the method's name.
+        ``(T, J)`` str: the name of the rule that filled each point (read at the missing
+        points only), for methods that combine several; ``None`` to label every filled
+        point with the method's name.
     flags
         Notes on particular gaps.
     """
@@ -210,13 +211,20 @@ def fill_gaps(
             f"uv must be (T, {skeleton.n_joints}, 2) and observed (T, {skeleton.n_joints}) for "
             f"skeleton '{skeleton.name}'; got {uv.shape} and {observed.shape}"
         )
-    missing = ~observed | ~np.isfinite(uv).all(axis=-1)
-    hidden = np.where(missing[..., None], np.nan, uv)
+    missing = ~observed | ~(np.isfinite(uv[..., 0]) & np.isfinite(uv[..., 1]))
+    frame, joint = np.nonzero(missing)
+    hidden = uv.copy()
+    hidden[frame, joint] = np.nan
     output = METHODS[method].fill(hidden, missing, skeleton, **params)
-    filled_uv = np.where(missing[..., None], output.uv, uv)
-    filled = missing & np.isfinite(filled_uv).all(axis=-1)
-    labels = method if output.labels is None else output.labels
-    fill_method = np.where(filled, labels, "")
+    filled_uv = uv.copy()
+    filled_uv[frame, joint] = output.uv[frame, joint]
+    done = np.isfinite(filled_uv[frame, joint]).all(axis=-1)
+    frame, joint = frame[done], joint[done]
+    filled = np.zeros_like(missing)
+    filled[frame, joint] = True
+    labels = np.asarray(method if output.labels is None else output.labels, dtype=str)
+    fill_method = np.zeros(missing.shape, dtype=labels.dtype)
+    fill_method[frame, joint] = labels if labels.ndim == 0 else labels[frame, joint]
     flags = (
         *_edge_flags(missing, skeleton),
         *output.flags,

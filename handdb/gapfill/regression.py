@@ -37,8 +37,8 @@ BATCH_GAPS = 64
 
 
 @dataclass(frozen=True)
-class _Samples:
-    """The coordinates the regressions read, shared by every gap of a clip.
+class Samples:
+    """The coordinates the regressions of a clip read, shared by every gap.
 
     Attributes
     ----------
@@ -50,14 +50,24 @@ class _Samples:
         ``(T + 1, 2 C + 1) float64``: the coordinates minus ``centre``, 0 where missing,
         then a column of ones (so one matrix product gives counts, sums and scatter); the
         last row, all zeros, stands for "no sample".
-    missing_bits
-        ``(T,) int64``: bit ``c`` set where joint ``columns[c]`` is missing.
     """
 
     columns: np.ndarray
     centre: np.ndarray
     values: np.ndarray
-    missing_bits: np.ndarray
+
+    def coordinates(self, frame: np.ndarray, column: np.ndarray) -> np.ndarray:
+        """``(N, 2) float64``, pixels: the observed points of ``column`` at ``frame``."""
+        pair = 2 * column[:, None] + np.arange(2)
+        return self.values[frame[:, None], pair] + self.centre[pair]
+
+    def observed_range(self, seen: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """``(2 C,)`` lowest and highest value of each coordinate where ``seen`` ``(T, C)``."""
+        seen = np.repeat(seen, 2, axis=1)
+        centred = self.values[:-1, :-1]
+        low = np.min(centred, axis=0, where=seen, initial=np.inf)
+        high = np.max(centred, axis=0, where=seen, initial=-np.inf)
+        return low + self.centre, high + self.centre
 
 
 def _bit_sets(members: np.ndarray) -> np.ndarray:
@@ -65,20 +75,38 @@ def _bit_sets(members: np.ndarray) -> np.ndarray:
     return members @ np.left_shift(1, np.arange(members.shape[1], dtype=np.int64))
 
 
-def _samples(uv: np.ndarray, missing: np.ndarray, columns: np.ndarray) -> _Samples:
+def regression_samples(uv: np.ndarray, missing: np.ndarray, columns: np.ndarray) -> Samples:
+    """Gather the coordinates of the joints ``columns`` that the regressions read.
+
+    Parameters
+    ----------
+    uv
+        ``(T, J, 2) float64``, pixels, finite at the observed points.
+    missing
+        ``(T, J) bool``: points that are not observed (their values are never read).
+    columns
+        ``(C,) int64``, ascending: the joints to read.
+
+    Returns
+    -------
+    Samples
+        Valid for regressions whose missing points include ``missing``: a regression that
+        hides more points only reads samples where they are seen.
+    """
     n_frames = uv.shape[0]
     seen = np.repeat(~missing[:, columns], 2, axis=1)
-    coordinates = np.where(seen, uv[:, columns].reshape(n_frames, -1), 0.0)
+    coordinates = np.where(seen, np.take(uv, columns, axis=1).reshape(n_frames, -1), 0.0)
     centre = coordinates.sum(axis=0) / np.maximum(seen.sum(axis=0), 1)
     values = np.zeros((n_frames + 1, coordinates.shape[1] + 1))
     values[:-1, :-1] = np.where(seen, coordinates - centre, 0.0)
     values[:-1, -1] = 1.0
-    return _Samples(columns, centre, values, _bit_sets(missing[:, columns]))
+    return Samples(columns, centre, values)
 
 
-def _training_frames(samples: _Samples, gaps: Gaps, needed: np.ndarray) -> np.ndarray:
+def _training_frames(missing_bits: np.ndarray, gaps: Gaps, needed: np.ndarray) -> np.ndarray:
     """Find the frames within :data:`WINDOW` of each gap where its ``needed`` columns are seen.
 
+    ``missing_bits`` ``(T,) int64`` has bit ``c`` set where column ``c`` is missing;
     ``needed`` ``(G, C) bool`` marks the columns that must be observed in a training frame.
     Returns ``(G, F) int64`` rows of ``samples.values``: each gap's training frames, first,
     then the "no sample" row ``T`` up to the width ``F`` of the widest training set.
@@ -89,20 +117,22 @@ def _training_frames(samples: _Samples, gaps: Gaps, needed: np.ndarray) -> np.nd
     window = low[:, None] + np.arange(np.max(high - low))
     inside = window < high[:, None]
     window = np.minimum(window, n_frames - 1)
-    train = inside & ((samples.missing_bits[window] & _bit_sets(needed)[:, None]) == 0)
+    train = inside & ((missing_bits[window] & _bit_sets(needed)[:, None]) == 0)
     rows = np.sort(np.where(train, window, n_frames), axis=1)
     return rows[:, :max(int(train.sum(axis=1).max()), 1)]
 
 
 def _predict_gaps(
-    samples: _Samples, gaps: Gaps, usable: np.ndarray
+    samples: Samples, missing_bits: np.ndarray, gaps: Gaps, usable: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray]:
     """Fit each gap's ridge regression and predict its joint around and in the gap.
 
     Parameters
     ----------
     samples
-        The clip's coordinates (:func:`_samples`).
+        The clip's coordinates (:func:`regression_samples`).
+    missing_bits
+        ``(T,) int64``: bit ``c`` set where joint ``samples.columns[c]`` is missing.
     gaps
         ``G`` gaps, each of a joint among ``samples.columns``.
     usable
@@ -118,7 +148,7 @@ def _predict_gaps(
     """
     target = np.searchsorted(samples.columns, gaps.joint)
     own = np.arange(samples.columns.size) == target[:, None]
-    x = samples.values[_training_frames(samples, gaps, usable | own)]
+    x = samples.values[_training_frames(missing_bits, gaps, usable | own)]
     moments = np.swapaxes(x, 1, 2) @ x
     n_train = moments[:, -1, -1]
     n = np.maximum(n_train, 1.0)[:, None]
@@ -142,7 +172,7 @@ def _predict_gaps(
 
 
 def _blend_to_edges(
-    uv: np.ndarray, gaps: Gaps, predicted: np.ndarray, gap: np.ndarray, offset: np.ndarray
+    samples: Samples, gaps: Gaps, predicted: np.ndarray, gap: np.ndarray, offset: np.ndarray
 ) -> np.ndarray:
     """Add to each gap's prediction its residuals at the bounding frames, blended across.
 
@@ -150,13 +180,65 @@ def _blend_to_edges(
     list the gaps' points (gap, frames after its start). Returns ``(N, 2)`` estimates.
     """
     rows = np.arange(len(gaps))
-    before = uv[np.maximum(gaps.start - 1, 0), gaps.joint] - predicted[:, 0]
-    after = (uv[np.minimum(gaps.stop, gaps.n_frames - 1), gaps.joint]
+    column = np.searchsorted(samples.columns, gaps.joint)
+    before = (samples.coordinates(np.maximum(gaps.start - 1, 0), column)
+              - predicted[:, 0])
+    after = (samples.coordinates(np.minimum(gaps.stop, gaps.n_frames - 1), column)
              - predicted[rows, gaps.length + 1])
     before = np.where(gaps.leading[:, None], after, before)
     after = np.where(gaps.trailing[:, None], before, after)
     share = ((offset + 1) / (gaps.length[gap] + 1))[:, None]
     return predicted[gap, offset + 1] + (1 - share) * before[gap] + share * after[gap]
+
+
+def regression_estimates(
+    samples: Samples, missing: np.ndarray, gaps: Gaps, predictors: np.ndarray
+) -> np.ndarray:
+    """Estimate the points of ``gaps`` by ridge regression on the predictors seen throughout.
+
+    Parameters
+    ----------
+    samples
+        The clip's coordinates (:func:`regression_samples`), reading the gaps' joints and
+        the ``predictors``; gathered with ``missing`` or fewer points missing.
+    missing
+        ``(T, J) bool``: points that are not observed; neither predictors nor training
+        samples are taken from them.
+    gaps
+        Non-whole-clip gaps of joints among ``samples.columns``.
+    predictors
+        ``(J,) bool``: joints that may serve as predictors.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(N, 2) float64``, pixels: the estimates at the points of ``gaps.frames()``, in
+        order; NaN where a gap had no predictor seen throughout it or too few training
+        frames.
+    """
+    n_frames = missing.shape[0]
+    columns = samples.columns
+    missing_columns = missing[:, columns]
+    missing_so_far = np.zeros((n_frames + 1, columns.size), dtype=np.int32)
+    np.cumsum(missing_columns, axis=0, out=missing_so_far[1:])
+    missing_bits = _bit_sets(missing_columns)
+    low, high = samples.observed_range(~missing_columns)
+    margin = RANGE_MARGIN * (high - low)
+    estimates = np.empty((int(gaps.length.sum()), 2))
+    done = 0
+    for batch in np.array_split(np.arange(len(gaps)), -(-len(gaps) // BATCH_GAPS)):
+        part = gaps.select(batch)
+        first = missing_so_far[np.maximum(part.start - 1, 0)]
+        last = missing_so_far[np.minimum(part.stop + 1, n_frames)]
+        usable = (first == last) & predictors[columns] & (columns != part.joint[:, None])
+        predicted, ok = _predict_gaps(samples, missing_bits, part, usable)
+        gap, frame, joint = part.frames()
+        pair = 2 * np.searchsorted(columns, joint)[:, None] + np.arange(2)
+        estimate = np.clip(_blend_to_edges(samples, part, predicted, gap, frame - part.start[gap]),
+                           (low - margin)[pair], (high + margin)[pair])
+        estimates[done:done + gap.size] = np.where(ok[gap, None], estimate, np.nan)
+        done += gap.size
+    return estimates
 
 
 def regression_fill(
@@ -182,26 +264,10 @@ def regression_fill(
         predictor seen throughout it or too few training frames.
     """
     filled = uv.copy()
-    if not len(gaps):
-        return filled
-    n_frames = uv.shape[0]
-    missing_so_far = np.vstack([np.zeros((1, missing.shape[1]), dtype=np.int64),
-                                np.cumsum(missing, axis=0)])
-    seen = np.where(missing[..., None], np.nan, uv)
-    low, high = np.nanmin(seen, axis=0), np.nanmax(seen, axis=0)
-    margin = RANGE_MARGIN * (high - low)
-    gap_joints = np.zeros_like(predictors)
-    gap_joints[gaps.joint] = True
-    columns = np.flatnonzero(predictors | gap_joints)
-    samples = _samples(uv, missing, columns)
-    for batch in np.array_split(np.arange(len(gaps)), -(-len(gaps) // BATCH_GAPS)):
-        part = gaps.select(batch)
-        first = missing_so_far[np.maximum(part.start - 1, 0)][:, columns]
-        last = missing_so_far[np.minimum(part.stop + 1, n_frames)][:, columns]
-        usable = (first == last) & predictors[columns] & (columns != part.joint[:, None])
-        predicted, ok = _predict_gaps(samples, part, usable)
-        gap, frame, joint = part.frames()
-        estimate = np.clip(_blend_to_edges(uv, part, predicted, gap, frame - part.start[gap]),
-                           (low - margin)[joint], (high + margin)[joint])
-        filled[frame, joint] = np.where(ok[gap, None], estimate, np.nan)
+    if len(gaps):
+        gap_joints = np.zeros_like(predictors)
+        gap_joints[gaps.joint] = True
+        samples = regression_samples(uv, missing, np.flatnonzero(predictors | gap_joints))
+        _, frame, joint = gaps.frames()
+        filled[frame, joint] = regression_estimates(samples, missing, gaps, predictors)
     return filled
