@@ -42,10 +42,10 @@ def _carriers_of(basis: np.ndarray, joint: np.ndarray) -> tuple[np.ndarray, np.n
     ``basis`` is ``(J, J) bool`` (row ``j``: the joints that carry joint ``j``); ``K`` is the
     most carriers any of the points has, rows with fewer are padded with invalid entries.
     """
-    rows = basis[joint] & (np.arange(basis.shape[1]) != joint[:, None])
-    width = max(int(rows.sum(axis=1).max(initial=0)), 1)
+    rows = basis & ~np.eye(basis.shape[0], dtype=bool)
+    width = max(int(rows[np.unique(joint)].sum(axis=1).max(initial=0)), 1)
     carriers = np.argsort(~rows, axis=1, kind="stable")[:, :width]
-    return carriers, np.take_along_axis(rows, carriers, axis=1)
+    return carriers[joint], np.take_along_axis(rows, carriers, axis=1)[joint]
 
 
 def _carry(
@@ -59,6 +59,23 @@ def _carry(
     mapped, ok = map_points(uv[before, carriers], uv[now, carriers], weights, query,
                             affine=affine)
     return np.where(ok[:, None], mapped, query)
+
+
+def _carried(
+    uv: np.ndarray, missing: np.ndarray, gaps: Gaps, basis: np.ndarray, affine: bool
+) -> np.ndarray:
+    """The points of ``gaps`` carried from both edges, blended: ``(N, 2)``, in order."""
+    basis = np.broadcast_to(basis, (uv.shape[1], uv.shape[1]))
+    gap, frame, joint = gaps.frames()
+    before = np.maximum(gaps.start[gap] - 1, 0)
+    after = np.minimum(gaps.stop[gap], gaps.n_frames - 1)
+    from_before, from_after = np.split(
+        _carry(uv, missing, np.concatenate([before, after]), np.tile(frame, 2),
+               np.tile(joint, 2), basis, affine), 2)
+    share_after = ((frame - before) / np.maximum(after - before, 1))[:, None]
+    blended = (1 - share_after) * from_before + share_after * from_after
+    blended = np.where(gaps.leading[gap][:, None], from_after, blended)
+    return np.where(gaps.trailing[gap][:, None], from_before, blended)
 
 
 def carry_across_gaps(
@@ -85,19 +102,9 @@ def carry_across_gaps(
     numpy.ndarray
         ``(T, J, 2) float64``: ``uv`` with the gaps' points filled.
     """
-    basis = np.broadcast_to(basis, (uv.shape[1], uv.shape[1]))
-    gap, frame, joint = gaps.frames()
-    before = np.maximum(gaps.start[gap] - 1, 0)
-    after = np.minimum(gaps.stop[gap], gaps.n_frames - 1)
-    from_before, from_after = np.split(
-        _carry(uv, missing, np.concatenate([before, after]), np.tile(frame, 2),
-               np.tile(joint, 2), basis, affine), 2)
-    share_after = ((frame - before) / np.maximum(after - before, 1))[:, None]
-    blended = (1 - share_after) * from_before + share_after * from_after
-    blended = np.where(gaps.leading[gap][:, None], from_after, blended)
-    blended = np.where(gaps.trailing[gap][:, None], from_before, blended)
+    _, frame, joint = gaps.frames()
     filled = uv.copy()
-    filled[frame, joint] = blended
+    filled[frame, joint] = _carried(uv, missing, gaps, basis, affine)
     return filled
 
 
@@ -201,10 +208,10 @@ def carry_along_chains(
     unresolved[frame, joint_of_point] = True
     carriers = parent_bones(skeleton)
     depth = skeleton.depth()
-    filled = uv
+    filled = uv.copy()
     for level in np.unique(depth[gaps.joint]):
-        at_level = depth[gaps.joint] == level
-        filled = carry_across_gaps(filled, unresolved, gaps.select(at_level), carriers,
-                                   affine=False)
-        unresolved[:, depth == level] = False
+        at_level = gaps.select(depth[gaps.joint] == level)
+        _, frame, joint = at_level.frames()
+        filled[frame, joint] = _carried(filled, unresolved, at_level, carriers, affine=False)
+        unresolved[frame, joint] = False
     return filled
