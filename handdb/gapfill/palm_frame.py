@@ -18,7 +18,14 @@ import numpy as np
 
 from handdb.gapfill.rest_pose import rest_pose_2d
 from handdb.gapfill.rigid import MIN_PALM_POINTS, palm_joints
-from handdb.gapfill.transfer import AFFINE, NO_MAP, apply_linear, fit_maps, inverse_2x2
+from handdb.gapfill.transfer import (
+    AFFINE,
+    NO_MAP,
+    apply_linear,
+    fit_maps,
+    fit_maps_from_shape,
+    inverse_2x2,
+)
 from handdb.skeletons import Skeleton
 
 
@@ -40,10 +47,6 @@ class PalmMotion:
     linear: np.ndarray
     offset: np.ndarray
     fitted: np.ndarray
-
-
-def _repeat(points: np.ndarray, n_frames: int) -> np.ndarray:
-    return np.broadcast_to(points, (n_frames, *points.shape))
 
 
 def _interpolate_in_time(values: np.ndarray, known: np.ndarray) -> np.ndarray:
@@ -84,8 +87,7 @@ def palm_motion(uv: np.ndarray, missing: np.ndarray, skeleton: Skeleton) -> Palm
     shape_points, shape_seen = points[shape_from], seen[shape_from]
     reference = rest_pose_2d(skeleton)[palm]
     for _ in range(2):
-        linear, offset, kind = fit_maps(_repeat(reference, shape_from.size), shape_points,
-                                        shape_seen)
+        linear, offset, kind = fit_maps_from_shape(reference, shape_points, shape_seen)
         fitted = kind == AFFINE
         shaping = complete[shape_from] if complete.any() else fitted
         inverse = inverse_2x2(np.where(fitted[:, None, None], linear, np.eye(2)))
@@ -94,7 +96,7 @@ def palm_motion(uv: np.ndarray, missing: np.ndarray, skeleton: Skeleton) -> Palm
         seen_once = ~np.isnan(canonical[..., 0]).all(axis=0)
         reference = np.where(seen_once[:, None], np.nanmedian(
             np.where(seen_once[None, :, None], canonical, 0.0), axis=0), reference)
-    linear, offset, kind = fit_maps(_repeat(reference, len(uv)), points, seen)
+    linear, offset, kind = fit_maps_from_shape(reference, points, seen)
     fitted = kind == AFFINE
     if not fitted.any():
         return None

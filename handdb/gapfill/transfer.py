@@ -35,6 +35,11 @@ def inverse_2x2(matrices: np.ndarray) -> np.ndarray:
     return adjugate / (a * d - b * c)[..., None, None]
 
 
+def _member_bits(members: np.ndarray) -> np.ndarray:
+    """``(N, K) bool -> (N,) int64``: bit ``k`` set where point ``k`` is a member (K < 63)."""
+    return members @ np.left_shift(1, np.arange(members.shape[1], dtype=np.int64))
+
+
 def _centred(points: np.ndarray, weights: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Return the weighted mean ``(N, 2)`` of ``(N, K, 2)`` points and the points about it.
 
@@ -107,6 +112,49 @@ def fit_maps(
 
     offset = dst_mean - apply_linear(linear, src_mean)
     return linear, np.where((count >= 1)[:, None], offset, np.nan), kind
+
+
+def fit_maps_from_shape(
+    shape: np.ndarray, target: np.ndarray, weights: np.ndarray, *, affine: bool = True
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Fit the maps from one ``shape`` to many targets (:func:`fit_maps`, shape repeated).
+
+    With the source and the points that take part fixed, the fitted map is an affine
+    function of the target points. It is found once per distinct set of points, by
+    fitting the zero target and the unit targets, and applied to every target fitted on
+    that set as one matrix product: the same maps as :func:`fit_maps`, to rounding.
+
+    Parameters
+    ----------
+    shape
+        ``(K, 2) float64``: the source points of every fit.
+    target, weights, affine
+        ``(N, K, 2)``, ``(N, K) bool``: as for :func:`fit_maps`.
+
+    Returns
+    -------
+    linear, offset, kind
+        As for :func:`fit_maps`.
+    """
+    n_targets, n_points = weights.shape
+    n_params = 2 * n_points + 1
+    point_sets, first, set_of = np.unique(_member_bits(weights), return_index=True,
+                                          return_inverse=True)
+    probes = np.concatenate([np.zeros((1, 2 * n_points)), np.eye(2 * n_points)])
+    linear, offset, kind = fit_maps(
+        np.broadcast_to(shape, (point_sets.size * n_params, n_points, 2)),
+        np.tile(probes.reshape(n_params, n_points, 2), (point_sets.size, 1, 1)),
+        np.repeat(weights[first], n_params, axis=0), affine=affine)
+    maps = np.concatenate([linear.reshape(-1, 4), offset], axis=1)
+    maps = maps.reshape(point_sets.size, n_params, 6)
+    constant, slope = maps[:, 0], maps[:, 1:] - maps[:, :1]
+    flat_target = np.where(weights[..., None], target, 0.0).reshape(n_targets, -1)
+    fitted = np.empty((n_targets, 6))
+    order = np.argsort(set_of.ravel(), kind="stable")
+    for index, rows in enumerate(np.split(order, np.cumsum(np.bincount(set_of.ravel()))[:-1])):
+        fitted[rows] = flat_target[rows] @ slope[index] + constant[index]
+    return (fitted[:, :4].reshape(n_targets, 2, 2), fitted[:, 4:],
+            kind[::n_params][set_of.ravel()])
 
 
 def map_points(
