@@ -56,58 +56,18 @@ from handdb.lifting.geometry import (
     accumulate_depths,
     centred_pixels,
     depth_magnitudes,
-    dot3,
     eq6_scale,
     orthographic_points,
     path_matrix,
     projected_lengths,
 )
-from handdb.lifting.hand_layout import CHAIN_BONES, HandLayout, hand_layout
+from handdb.lifting.hand_layout import HandLayout, hand_layout
+from handdb.lifting.hand_prior import SIGN_STATES, score_fingers
 from handdb.lifting.pinhole import camera_rays, estimate_root_depth, walk_rays
 from handdb.lifting.registry import register
 from handdb.lifting.result import LiftResult
 from handdb.lifting.temporal import flip_costs, sigmoid, sign_posterior, smooth_scale
 from handdb.skeletons import Skeleton
-
-#: Every sign pattern of a finger's three bones, ``(8, 3)``; row ``k`` has bit ``b`` of
-#: ``k`` (most significant first) set where bone ``b`` is negative.
-SIGN_STATES = np.array(list(itertools.product((1.0, -1.0), repeat=CHAIN_BONES)))
-
-#: Columns summing a finger's state weights where bone 0, 1, 2 is positive, then all.
-_MARGINALS = np.concatenate([SIGN_STATES > 0, np.ones((len(SIGN_STATES), 1))], axis=1)
-
-#: The two signs a single bone can take, in the order of each bit of a state.
-BONE_SIGNS = np.array([1.0, -1.0])
-
-#: Flexion ranges of a long finger's MCP, PIP and DIP joints, degrees (flexion positive).
-LONG_FINGER_RANGE_DEG = np.array([[-30.0, 95.0], [-5.0, 115.0], [-15.0, 95.0]])
-
-#: Flexion ranges of the thumb's three joints below the palm, degrees.
-THUMB_RANGE_DEG = np.array([[-45.0, 90.0], [-20.0, 80.0], [-30.0, 95.0]])
-
-#: Softness of a range limit: a violation by this much costs one unit of log-likelihood.
-RANGE_SOFTNESS_DEG = 10.0
-
-#: DIP flexion is about this share of PIP flexion in a natural, unloaded finger.
-DIP_PIP_RATIO = 2.0 / 3.0
-
-#: Standard deviation of the DIP flexion about ``DIP_PIP_RATIO`` times the PIP's, degrees.
-COUPLING_SIGMA_DEG = 25.0
-
-#: How far a finger's joints may go to the back of the palm plane, as a share of the
-#: finger's first bone below the palm: about sin 30° for a hyperextended MCP; the thumb
-#: stays in front of the palm (on thesis21, where the thumb hangs from the palm fold, a
-#: margin of 0.2 let its first bone tilt behind the palm: clench 0.10 -> 0.076 cm).
-FINGER_DORSAL_MARGIN = 0.5
-THUMB_DORSAL_MARGIN = 0.0
-
-#: Softness of that limit, as a share of the first bone.
-DORSAL_SOFTNESS = 0.1
-
-#: A weak prior toward relaxed poses: each joint's flexion ~ N(centre, sigma), degrees.
-#: It settles the frames where a finger fits either palm tilt, flexed a little or a lot.
-COMFORT_CENTRE_DEG = 15.0
-COMFORT_SIGMA_DEG = 45.0
 
 #: Rounds of root depth and sign estimation for a pinhole clip (each round's signs give
 #: the next round's root depth).
@@ -131,17 +91,6 @@ MIRROR_SETTLED_ODDS = 20.0
 #: (an opposed thumb) or a mis-tracked one cannot outvote the others (on the real DHG
 #: capture the thumb alone, confidently wrong, flipped the palm for half the clip).
 FINGER_VOTE_CAP = 4.0
-
-HANDEDNESS = {"right": 1.0, "left": -1.0}
-
-
-def _unit(v: np.ndarray) -> np.ndarray:
-    with np.errstate(invalid="ignore", divide="ignore"):
-        return v / np.linalg.norm(v, axis=-1, keepdims=True)
-
-
-def _wrap(angle: np.ndarray) -> np.ndarray:
-    return (angle + np.pi) % (2.0 * np.pi) - np.pi
 
 
 def palm_signs(xy: np.ndarray, abs_dz: np.ndarray, skeleton: Skeleton,
@@ -202,86 +151,6 @@ def continuity_signs(depths: np.ndarray) -> np.ndarray:
     turn = np.ones(len(depths))
     turn[1:] = np.where(np.sum(depths[1:] * depths[:-1], axis=-1) < 0, -1.0, 1.0)
     return np.cumprod(turn)
-
-
-def finger_log_likelihood(candidates: FingerCandidates, bone_lengths: np.ndarray,
-                          layout: HandLayout, hand: str) -> tuple[np.ndarray, np.ndarray]:
-    """Log-likelihood of each finger's sign states under each palm state.
-
-    Parameters
-    ----------
-    candidates
-        Palm anchors and candidate bones (:mod:`handdb.lifting.finger_geometry`).
-    bone_lengths
-        ``(J,) float64``, clip units.
-    layout, hand
-        The skeleton's palm and fingers, and which hand the clip shows.
-
-    Returns
-    -------
-    anatomy
-        ``(T, 2, F, 8) float64``: ranges of motion, the dorsal limit and the DIP-PIP
-        coupling; 0 where a finger's bones have no image points.
-    comfort
-        ``(T, 2, F, 8) float64``: the weak prior toward relaxed poses. It breaks ties but
-        is no evidence about the clip-wide mirror, which is judged on ``anatomy`` alone.
-    """
-    anchors = candidates.anchors
-    wrist = anchors[:, :, 0]                                             # (T, 2, 3)
-    normal = HANDEDNESS[hand] * _unit(np.cross(anchors[:, :, 1] - wrist,
-                                               anchors[:, :, 2] - wrist))[:, :, None]
-    forward = anchors[:, :, 3:] - wrist[:, :, None]                      # (T, 2, F, 3)
-    base_height = dot3(forward, normal)                                  # (T, 2, F)
-    forward = _unit(forward - base_height[..., None] * normal)
-    on_signs = (slice(None), slice(None), slice(None), None, None, None)
-    palmar = [dot3(bone, normal[on_signs]) for bone in candidates.bones]
-    ahead = [dot3(bone, forward[on_signs]) for bone in candidates.bones]
-    phi = [np.arctan2(p, a) for p, a in zip(palmar, ahead, strict=True)]
-    mcp, pip, dip = phi[0], _wrap(phi[1] - phi[0]), _wrap(phi[2] - phi[1])
-    thumb = layout.is_thumb[:, None, None, None]
-    ranges = np.radians(np.where(thumb[..., None, None], THUMB_RANGE_DEG,
-                                 LONG_FINGER_RANGE_DEG))                 # (F,1,1,1,3,2)
-    softness = np.radians(RANGE_SOFTNESS_DEG)
-
-    def outside(angle: np.ndarray, joint: int) -> np.ndarray:
-        low, high = ranges[..., joint, 0], ranges[..., joint, 1]
-        return ((np.clip(low - angle, 0.0, None) + np.clip(angle - high, 0.0, None))
-                / softness) ** 2
-
-    coupling = (dip - DIP_PIP_RATIO * pip) / np.radians(COUPLING_SIGMA_DEG)
-    first_bone = bone_lengths[layout.chains[:, 0]][:, None, None, None]  # (F, 1, 1, 1)
-    margin = np.where(thumb, THUMB_DORSAL_MARGIN, FINGER_DORSAL_MARGIN) * first_bone
-    knuckle = base_height[on_signs] + palmar[0]                          # heights over the palm
-    middle = knuckle + palmar[1]
-    end = middle + palmar[2]
-    dorsal = sum((np.clip(-height - margin, 0.0, None) / (DORSAL_SOFTNESS * first_bone)) ** 2
-                 for height in (knuckle, middle, end))
-    cost = (outside(mcp, 0) + outside(pip, 1) + outside(dip, 2) + dorsal
-            + np.where(thumb, 0.0, coupling**2))
-    centre, spread = np.radians(COMFORT_CENTRE_DEG), np.radians(COMFORT_SIGMA_DEG)
-    comfort = (((mcp - centre) / spread) ** 2 + ((pip - centre) / spread) ** 2
-               + ((dip - centre) / spread) ** 2)
-    shape = np.broadcast_shapes(cost.shape, comfort.shape)
-    states = shape[:-3] + (len(SIGN_STATES),)
-    return (np.nan_to_num(-0.5 * np.broadcast_to(cost, shape)).reshape(states),
-            np.nan_to_num(-0.5 * np.broadcast_to(comfort, shape)).reshape(states))
-
-
-def bone_log_odds(log_likelihood: np.ndarray) -> np.ndarray:
-    """Per-bone evidence for the positive sign, marginalised over the finger's states.
-
-    ``(..., 8)`` log-likelihoods in, ``(..., 3)`` log-odds out.
-    """
-    peak = np.max(log_likelihood, axis=-1, keepdims=True)
-    mass = np.exp(log_likelihood - peak) @ _MARGINALS                  # (..., 4)
-    with np.errstate(divide="ignore"):
-        return np.log(mass[..., :3]) - np.log(mass[..., 3:] - mass[..., :3])
-
-
-def _log_evidence(log_likelihood: np.ndarray) -> np.ndarray:
-    """``log(sum(exp(.)))`` over the last axis, ``(..., 8)`` to ``(...)``."""
-    peak = np.max(log_likelihood, axis=-1)
-    return peak + np.log(np.exp(log_likelihood - peak[..., None]).sum(axis=-1))
 
 
 @dataclass(frozen=True)
@@ -353,30 +222,28 @@ def resolve_signs(
                                              skeleton, layout)
     else:
         candidates = candidates_for(palm)
-    anatomy, comfort = finger_log_likelihood(candidates, bone_lengths, layout, hand)
-    log_lik = anatomy + comfort
-
-    evidence = _log_evidence(log_lik)                                    # (T, 2, F)
-    votes = np.clip(evidence[:, 0] - evidence[:, 1], -FINGER_VOTE_CAP, FINGER_VOTE_CAP)
+    scores = score_fingers(candidates, bone_lengths, layout, hand)
+    votes = np.clip(scores.evidence[:, 0] - scores.evidence[:, 1], -FINGER_VOTE_CAP,
+                    FINGER_VOTE_CAP)                                      # (T, F)
     tilt = np.sqrt(np.nanmean(abs_dz[:, layout.palm_bones] ** 2, axis=1, keepdims=True))
     floor = TEMPORAL_FLOOR * np.nanmean(bone_lengths[layout.palm_bones], keepdims=True)
     palm_odds = sign_posterior(votes.sum(axis=1, keepdims=True), flip_costs(tilt, floor))[:, 0]
     state = (palm_odds < 0).astype(np.int64)
-    chosen = np.take_along_axis(log_lik, state[:, None, None, None], axis=1)[:, 0]
+    frames = np.arange(n_frames)[:, None]
+    chosen = scores.bone_log_odds[frames[:, 0], state]                   # (T, F, 3)
 
     chain_dz = abs_dz[:, layout.chains].reshape(n_frames, -1)            # (T, F * 3)
     floor = TEMPORAL_FLOOR * bone_lengths[layout.chains].ravel()
-    finger_odds = sign_posterior(bone_log_odds(chosen).reshape(n_frames, -1),
-                                 flip_costs(chain_dz, floor)).reshape(chosen.shape[:2] + (3,))
+    finger_odds = sign_posterior(chosen.reshape(n_frames, -1),
+                                 flip_costs(chain_dz, floor)).reshape(chosen.shape)
     finger_signs = np.where(finger_odds < 0, -1.0, 1.0)
 
     # The mirror flips the palm tilt and every finger state at once. Compare each frame's
     # best pose under the chosen tilt with its exact mirror image, on anatomy alone.
-    frames = np.arange(n_frames)[:, None]
     fingers = np.arange(len(layout.fingers))[None, :]
-    best = np.argmax(chosen, axis=-1)                                    # (T, F)
-    own = anatomy[frames, state[:, None], fingers, best]
-    mirror = anatomy[frames, 1 - state[:, None], fingers, len(SIGN_STATES) - 1 - best]
+    best = scores.best[frames[:, 0], state]                              # (T, F)
+    own = scores.anatomy[frames, state[:, None], fingers, best]
+    mirror = scores.anatomy[frames, 1 - state[:, None], fingers, len(SIGN_STATES) - 1 - best]
     mirror_log_odds = float(np.sum(own - mirror))
     if mirror_log_odds < 0:
         mirror_log_odds, state, finger_signs = -mirror_log_odds, 1 - state, -finger_signs

@@ -5,13 +5,15 @@ to the next costs nothing; flipping it makes the bone's depth jump by ``a + b`` 
 ``|a − b|`` (``a``, ``b``: its unsigned depth in the two frames), so under Gaussian
 frame-to-frame depth changes of spread ``σ`` a flip costs ``2ab / σ²`` nats: free while the
 bone crosses the image plane, prohibitive while it points steeply toward or away from the
-camera. Posteriors of the chain come from the forward-backward algorithm, written as
-prefix products of 2×2 matrices computed by recursive doubling, so the work is array
-operations over all frames at once (``log2 T`` levels), never a loop over frames.
+camera. Posteriors of the chain come from the forward-backward algorithm, its messages
+carried as log-odds in a compiled (numba) scan over the frames.
 """
 
 from __future__ import annotations
 
+import math
+
+import numba
 import numpy as np
 from scipy.ndimage import gaussian_filter1d, percentile_filter
 
@@ -52,36 +54,6 @@ def flip_costs(magnitude: np.ndarray, floor: np.ndarray) -> np.ndarray:
     return cost
 
 
-def _product(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """Multiply stacks of 2×2 matrices, ``a @ b``, rescaled to a largest entry of 1.
-
-    Matrices are held entry-major, ``(2, 2, ...)``, so every entry is one contiguous
-    array and the products are plain elementwise operations.
-    """
-    out = np.stack([np.stack([a[0, 0] * b[0, 0] + a[0, 1] * b[1, 0],
-                              a[0, 0] * b[0, 1] + a[0, 1] * b[1, 1]]),
-                    np.stack([a[1, 0] * b[0, 0] + a[1, 1] * b[1, 0],
-                              a[1, 0] * b[0, 1] + a[1, 1] * b[1, 1]])])
-    return out / np.maximum(np.maximum(out[0, 0], out[0, 1]),
-                            np.maximum(out[1, 0], out[1, 1]))
-
-
-def _prefix_products(matrices: np.ndarray) -> np.ndarray:
-    """``out[:, :, t] = m[:, :, 0] @ ... @ m[:, :, t]`` (each rescaled), by recursive doubling.
-
-    ``matrices`` is ``(2, 2, T, ...)``, entry-major (see :func:`_product`).
-    """
-    n = matrices.shape[2]
-    if n == 1:
-        return matrices
-    odd = _prefix_products(_product(matrices[:, :, 0 : n - 1 : 2], matrices[:, :, 1:n:2]))
-    out = np.empty_like(matrices)
-    out[:, :, 0] = matrices[:, :, 0]
-    out[:, :, 1::2] = odd
-    out[:, :, 2::2] = _product(odd[:, :, : (n - 1) // 2], matrices[:, :, 2::2])
-    return out
-
-
 def sign_posterior(log_odds: np.ndarray, flip_cost: np.ndarray) -> np.ndarray:
     """Posterior log-odds of the positive sign of each chain, given every frame.
 
@@ -98,30 +70,42 @@ def sign_posterior(log_odds: np.ndarray, flip_cost: np.ndarray) -> np.ndarray:
     numpy.ndarray
         ``(T, K) float64``.
     """
-    n_frames = len(log_odds)
-    if n_frames == 0:
-        return np.zeros(log_odds.shape)
-    # One frame is never surer than MAX_LOG_ODDS: unbounded evidence (a state of zero
-    # likelihood) would let consecutive steps annihilate and the scan divide 0 by 0.
-    half = 0.5 * np.clip(np.nan_to_num(log_odds), -MAX_LOG_ODDS, MAX_LOG_ODDS)
-    peak = np.abs(half)                     # each step scaled to a largest entry of 1
-    flip = -np.broadcast_to(flip_cost, half.shape) - peak
-    # step[i, j, t]: from state i at frame t - 1 to state j at frame t (0: positive).
-    emission = np.exp(np.stack([half - peak, -half - peak]))
-    step = np.stack([np.stack([emission[0], np.exp(flip - half)]),
-                     np.stack([np.exp(flip + half), emission[1]])])       # (2, 2, T, K)
-    start = emission[:, 0]                                              # (2, K)
-    forward = np.empty((2,) + half.shape)
-    forward[:, 0] = start
-    backward = np.ones((2,) + half.shape)
-    if n_frames > 1:
-        prefix = _prefix_products(step[:, :, 1:])
-        forward[:, 1:] = start[0] * prefix[0] + start[1] * prefix[1]
-        suffix = _prefix_products(step[:, :, :0:-1].transpose(1, 0, 2, 3))[:, :, ::-1]
-        backward[:, :-1] = suffix[0] + suffix[1]
-    with np.errstate(divide="ignore"):
-        log_joint = np.log(forward) + np.log(backward)
-    return np.clip(log_joint[0] - log_joint[1], -MAX_LOG_ODDS, MAX_LOG_ODDS)
+    # One frame is never surer than MAX_LOG_ODDS: it keeps every message finite.
+    evidence = np.clip(np.nan_to_num(log_odds), -MAX_LOG_ODDS, MAX_LOG_ODDS)
+    posterior = np.empty(evidence.shape)
+    _forward_backward(evidence, np.broadcast_to(flip_cost, evidence.shape), posterior)
+    return np.clip(posterior, -MAX_LOG_ODDS, MAX_LOG_ODDS)
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy")
+def _log_add_exp(a: float, b: float) -> float:
+    high = max(a, b)
+    return high + math.log1p(math.exp(min(a, b) - high))
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy")
+def _pass_on(log_odds: float, flip_cost: float) -> float:
+    """Log-odds of a chain's next state given its current state's log-odds."""
+    return _log_add_exp(log_odds, -flip_cost) - _log_add_exp(log_odds - flip_cost, 0.0)
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy")
+def _forward_backward(evidence, flip_cost, posterior):
+    """Fill ``posterior`` ``(T, K)`` with the log-odds of the forward and backward messages.
+
+    The messages of a two-state chain are carried as log-odds, one number per chain, so
+    they neither overflow nor need rescaling however long the clip.
+    """
+    n_frames, n_chains = evidence.shape
+    for k in range(n_chains):
+        message = 0.0
+        for t in range(n_frames - 1, -1, -1):
+            posterior[t, k] = message
+            message = _pass_on(evidence[t, k] + message, flip_cost[t, k])
+        message = 0.0
+        for t in range(n_frames):
+            message = evidence[t, k] + (_pass_on(message, flip_cost[t, k]) if t else 0.0)
+            posterior[t, k] += message
 
 
 def smooth_scale(bounds: np.ndarray, percentile: float = SCALE_PERCENTILE,

@@ -1,0 +1,291 @@
+"""The hand prior: how plausible each finger's depth-sign state is, given the palm.
+
+For each palm state (the palm's two mirror tilts) the palm's normal points to the palmar
+side as the hand's handedness says (``(index MCP − wrist) × (little MCP − wrist)`` for a
+right hand, the opposite for a left one), and each finger's three bones below the palm
+take one of eight sign states. A state is scored by its flexion angles in the finger's
+plane (the plane of the finger's metacarpal and the palm normal): each joint within its
+range of motion, flexing toward the palm, the DIP about 2/3 of the PIP, no joint far
+behind the palm. Scores are log-likelihoods.
+
+The scoring runs as one compiled kernel (numba) over frames, palm states, fingers and
+sign states: a few hundred floating-point operations per frame, with no temporary arrays.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+from dataclasses import dataclass
+
+import numba
+import numpy as np
+
+from handdb.lifting.finger_geometry import FingerCandidates
+from handdb.lifting.hand_layout import CHAIN_BONES, HandLayout
+
+#: Every sign pattern of a finger's three bones, ``(8, 3)``; row ``k`` has bit ``b`` of
+#: ``k`` (most significant first) set where bone ``b`` is negative.
+SIGN_STATES = np.array(list(itertools.product((1.0, -1.0), repeat=CHAIN_BONES)))
+
+#: Candidate bones of a finger: two first bones, four second, eight third.
+CANDIDATE_BONES = 14
+
+#: Flexion ranges of a long finger's MCP, PIP and DIP joints, degrees (flexion positive).
+LONG_FINGER_RANGE_DEG = np.array([[-30.0, 95.0], [-5.0, 115.0], [-15.0, 95.0]])
+
+#: Flexion ranges of the thumb's three joints below the palm, degrees.
+THUMB_RANGE_DEG = np.array([[-45.0, 90.0], [-20.0, 80.0], [-30.0, 95.0]])
+
+#: Softness of a range limit: a violation by this much costs one unit of log-likelihood.
+RANGE_SOFTNESS_DEG = 10.0
+
+#: DIP flexion is about this share of PIP flexion in a natural, unloaded finger.
+DIP_PIP_RATIO = 2.0 / 3.0
+
+#: Standard deviation of the DIP flexion about ``DIP_PIP_RATIO`` times the PIP's, degrees.
+COUPLING_SIGMA_DEG = 25.0
+
+#: How far a finger's joints may go to the back of the palm plane, as a share of the
+#: finger's first bone below the palm: about sin 30° for a hyperextended MCP; the thumb
+#: stays in front of the palm (on thesis21, where the thumb hangs from the palm fold, a
+#: margin of 0.2 let its first bone tilt behind the palm: clench 0.10 -> 0.076 cm).
+FINGER_DORSAL_MARGIN = 0.5
+THUMB_DORSAL_MARGIN = 0.0
+
+#: Softness of that limit, as a share of the first bone.
+DORSAL_SOFTNESS = 0.1
+
+#: A weak prior toward relaxed poses: each joint's flexion ~ N(centre, sigma), degrees.
+#: It settles the frames where a finger fits either palm tilt, flexed a little or a lot.
+COMFORT_CENTRE_DEG = 15.0
+COMFORT_SIGMA_DEG = 45.0
+
+HANDEDNESS = {"right": 1.0, "left": -1.0}
+
+#: States this many nats below a finger's best count as weight 0 (e^-40 < 1e-17).
+NEGLIGIBLE_LOG_WEIGHT = -40.0
+
+
+@dataclass(frozen=True)
+class FingerScores:
+    """How well each finger's sign states fit the hand prior, per frame and palm state.
+
+    Attributes
+    ----------
+    anatomy
+        ``(T, 2, F, 8) float64``: log-likelihood of each state from the ranges of motion,
+        the dorsal limit and the DIP-PIP coupling; 0 where a finger's bones have no image
+        points. The clip-wide mirror is judged on it alone.
+    evidence
+        ``(T, 2, F) float64``: log of the summed likelihood of the eight states, with the
+        weak prior toward relaxed poses (which breaks ties but says nothing about the
+        mirror) added to ``anatomy``.
+    bone_log_odds
+        ``(T, 2, F, 3) float64``: each bone's log-odds of the positive sign, marginalised
+        over the finger's states.
+    best
+        ``(T, 2, F) int64``: the most likely state.
+    """
+
+    anatomy: np.ndarray
+    evidence: np.ndarray
+    bone_log_odds: np.ndarray
+    best: np.ndarray
+
+
+def score_fingers(candidates: FingerCandidates, bone_lengths: np.ndarray,
+                  layout: HandLayout, hand: str) -> FingerScores:
+    """Score each finger's sign states under each palm state with the hand prior.
+
+    Parameters
+    ----------
+    candidates
+        Palm anchors and candidate bones (:mod:`handdb.lifting.finger_geometry`).
+    bone_lengths
+        ``(J,) float64``, clip units.
+    layout, hand
+        The skeleton's palm and fingers, and which hand the clip shows.
+
+    Returns
+    -------
+    FingerScores
+    """
+    anchors = candidates.anchors
+    n_frames, n_fingers = len(anchors), len(layout.fingers)
+    full = (n_frames, 2, n_fingers, 2, 2, 2, 3)
+    first = np.broadcast_to(candidates.bones[0], full)[:, :, :, :, 0, 0]
+    second = np.broadcast_to(candidates.bones[1], full)[:, :, :, :, :, 0]
+    third = np.broadcast_to(candidates.bones[2], full)
+    thumb = layout.is_thumb
+    ranges = np.radians(np.where(thumb[:, None, None], THUMB_RANGE_DEG,
+                                 LONG_FINGER_RANGE_DEG))                 # (F, 3, 2)
+    first_bone = bone_lengths[layout.chains[:, 0]]
+    margin = np.where(thumb, THUMB_DORSAL_MARGIN, FINGER_DORSAL_MARGIN) * first_bone
+    palmar = np.empty((n_frames, 2, n_fingers, CANDIDATE_BONES))
+    ahead = np.empty(palmar.shape)
+    base_height = np.empty((n_frames, 2, n_fingers))
+    _palm_frame_components(anchors, first, second, third, HANDEDNESS[hand], palmar, ahead,
+                           base_height)
+    scores = FingerScores(anatomy=np.empty(base_height.shape + (len(SIGN_STATES),)),
+                          evidence=np.empty(base_height.shape),
+                          bone_log_odds=np.empty(base_height.shape + (CHAIN_BONES,)),
+                          best=np.empty(base_height.shape, dtype=np.int64))
+    _score_states(np.arctan2(palmar, ahead), palmar, base_height, ranges,
+                  np.radians(RANGE_SOFTNESS_DEG), ~thumb, margin, DORSAL_SOFTNESS * first_bone,
+                  scores.anatomy, scores.evidence, scores.bone_log_odds, scores.best)
+    return scores
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy")
+def _wrap(angle: float) -> float:
+    """An angle in (-2 pi, 2 pi) brought to [-pi, pi)."""
+    if angle >= math.pi:
+        return angle - 2.0 * math.pi
+    if angle < -math.pi:
+        return angle + 2.0 * math.pi
+    return angle
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy")
+def _outside(angle: float, low: float, high: float, softness: float) -> float:
+    return ((max(low - angle, 0.0) + max(angle - high, 0.0)) / softness) ** 2
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy")
+def _dorsal(height: float, margin: float, softness: float) -> float:
+    return (max(-height - margin, 0.0) / softness) ** 2
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy")
+def _dot(u: np.ndarray, v: np.ndarray) -> float:
+    return u[0] * v[0] + u[1] * v[1] + u[2] * v[2]
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy")
+def _palm_frame_components(anchors, first, second, third, handedness, palmar, ahead,
+                           base_height):
+    """Each candidate bone in its finger's frame: toward the palmar side and ahead.
+
+    ``anchors`` is ``(T, 2, 3 + F, 3)``; ``first``, ``second``, ``third`` are the candidate
+    bones ``(T, 2, F, 2, 3)``, ``(T, 2, F, 2, 2, 3)``, ``(T, 2, F, 2, 2, 2, 3)``. Fills
+    ``palmar`` and ``ahead`` ``(2, F, 14, T)`` (the candidates in :func:`_candidate`'s
+    order) and ``base_height`` ``(T, 2, F)``, the height of each finger's base over the
+    palm plane.
+    """
+    n_frames, n_fingers = anchors.shape[0], first.shape[2]
+    across, along, normal = np.empty(3), np.empty(3), np.empty(3)
+    forward = np.empty(3)
+    for t in range(n_frames):
+        for p in range(2):
+            for k in range(3):
+                across[k] = anchors[t, p, 1, k] - anchors[t, p, 0, k]
+                along[k] = anchors[t, p, 2, k] - anchors[t, p, 0, k]
+            normal[0] = across[1] * along[2] - across[2] * along[1]
+            normal[1] = across[2] * along[0] - across[0] * along[2]
+            normal[2] = across[0] * along[1] - across[1] * along[0]
+            norm = math.sqrt(_dot(normal, normal))
+            for k in range(3):
+                normal[k] *= handedness / norm
+            for f in range(n_fingers):
+                for k in range(3):
+                    forward[k] = anchors[t, p, 3 + f, k] - anchors[t, p, 0, k]
+                height = _dot(forward, normal)
+                base_height[t, p, f] = height
+                for k in range(3):
+                    forward[k] -= height * normal[k]
+                norm = math.sqrt(_dot(forward, forward))
+                for k in range(3):
+                    forward[k] /= norm
+                for a in range(2):
+                    _project(first[t, p, f, a], normal, forward, palmar[t, p, f],
+                             ahead[t, p, f], _candidate(a))
+                    for b in range(2):
+                        _project(second[t, p, f, a, b], normal, forward, palmar[t, p, f],
+                                 ahead[t, p, f], _candidate(a, b))
+                        for c in range(2):
+                            _project(third[t, p, f, a, b, c], normal, forward,
+                                     palmar[t, p, f], ahead[t, p, f], _candidate(a, b, c))
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy")
+def _project(bone, normal, forward, palmar, ahead, index):
+    """Write ``bone``'s components along ``normal`` and ``forward`` at ``index``."""
+    palmar[index] = bone[0] * normal[0] + bone[1] * normal[1] + bone[2] * normal[2]
+    ahead[index] = bone[0] * forward[0] + bone[1] * forward[1] + bone[2] * forward[2]
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy")
+def _candidate(a: int, b: int = -1, c: int = -1) -> int:
+    """Position of a candidate bone among a finger's 14, by the signs above and at it."""
+    if b < 0:
+        return a
+    if c < 0:
+        return 2 + 2 * a + b
+    return 6 + 4 * a + 2 * b + c
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy")
+def _score_states(angle, palmar, base_height, ranges, range_softness, coupled, margin,
+                  dorsal_softness, anatomy, evidence, bone_log_odds, best):
+    """Fill the arrays of a :class:`FingerScores` (see there for their shapes).
+
+    ``angle`` and ``palmar`` are ``(T, 2, F, 14)``: each candidate bone's direction in its
+    finger's plane and its rise toward the palmar side; ``base_height`` ``(T, 2, F)``.
+    """
+    ratio_sigma = math.radians(COUPLING_SIGMA_DEG)
+    centre, spread = math.radians(COMFORT_CENTRE_DEG), math.radians(COMFORT_SIGMA_DEG)
+    n_frames, n_fingers = angle.shape[0], angle.shape[2]
+    low, high = ranges[..., 0], ranges[..., 1]
+    log_likelihood = np.empty(8)
+    for t in range(n_frames):
+        for p in range(2):
+            for f in range(n_fingers):
+                for a in range(2):
+                    mcp = angle[t, p, f, _candidate(a)]
+                    knuckle = base_height[t, p, f] + palmar[t, p, f, _candidate(a)]
+                    cost_a = (_outside(mcp, low[f, 0], high[f, 0], range_softness)
+                              + _dorsal(knuckle, margin[f], dorsal_softness[f]))
+                    relaxed_a = ((mcp - centre) / spread) ** 2
+                    for b in range(2):
+                        second = _candidate(a, b)
+                        pip = _wrap(angle[t, p, f, second] - mcp)
+                        middle = knuckle + palmar[t, p, f, second]
+                        cost_ab = (cost_a
+                                   + _outside(pip, low[f, 1], high[f, 1], range_softness)
+                                   + _dorsal(middle, margin[f], dorsal_softness[f]))
+                        relaxed_ab = relaxed_a + ((pip - centre) / spread) ** 2
+                        for c in range(2):
+                            third = _candidate(a, b, c)
+                            dip = _wrap(angle[t, p, f, third] - angle[t, p, f, second])
+                            end = middle + palmar[t, p, f, third]
+                            cost = (cost_ab
+                                    + _outside(dip, low[f, 2], high[f, 2], range_softness)
+                                    + _dorsal(end, margin[f], dorsal_softness[f]))
+                            if coupled[f]:
+                                cost += ((dip - DIP_PIP_RATIO * pip) / ratio_sigma) ** 2
+                            relaxed = relaxed_ab + ((dip - centre) / spread) ** 2
+                            state = 4 * a + 2 * b + c
+                            anatomy[t, p, f, state] = 0.0 if math.isnan(cost) else -0.5 * cost
+                            log_likelihood[state] = anatomy[t, p, f, state] + (
+                                0.0 if math.isnan(relaxed) else -0.5 * relaxed)
+                _summarise(log_likelihood, evidence, bone_log_odds, best, t, p, f)
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy")
+def _summarise(log_likelihood, evidence, bone_log_odds, best, t, p, f):
+    """Log evidence, per-bone log-odds and the best of a finger's eight states."""
+    top = np.argmax(log_likelihood)
+    best[t, p, f] = top
+    peak = log_likelihood[top]
+    total = first = second = third = 0.0
+    for state in range(8):
+        gap = log_likelihood[state] - peak
+        weight = math.exp(gap) if gap > NEGLIGIBLE_LOG_WEIGHT else 0.0
+        total += weight
+        first += weight if state < 4 else 0.0
+        second += weight if state % 4 < 2 else 0.0
+        third += weight if state % 2 == 0 else 0.0
+    evidence[t, p, f] = peak + math.log(total)
+    for bone, positive in enumerate((first, second, third)):
+        bone_log_odds[t, p, f, bone] = math.log(positive / (total - positive))
