@@ -206,7 +206,10 @@ def fill_auto(
         filled = _long_gap_fill(local, filled, unknown, gaps.select(by_model), skeleton,
                                 long_gaps, variance)
     if motion is not None:
-        filled = to_image(filled, motion)
+        frame, joint = np.nonzero(unknown)
+        local_filled = filled[frame, joint]
+        filled = placed.copy()
+        filled[frame, joint] = to_image(local_filled, motion, frame)
 
     labels = np.zeros(missing.shape, dtype=f"<U{max(map(len, RULE_LABELS))}")
     for rule, chosen in (("rigid", partial & palm), ("pchip", partial & ~palm & short),

@@ -21,6 +21,7 @@ from handdb.gapfill.rigid import MIN_PALM_POINTS, palm_joints
 from handdb.gapfill.transfer import (
     AFFINE,
     NO_MAP,
+    apply_affine,
     apply_linear,
     fit_maps,
     fit_maps_from_shape,
@@ -50,11 +51,18 @@ class PalmMotion:
 
 
 def _interpolate_in_time(values: np.ndarray, known: np.ndarray) -> np.ndarray:
+    """Interpolate ``(T, ...)`` values linearly in time where not ``known`` ``(T,) bool``."""
     frames = np.arange(values.shape[0])
-    flat = values.reshape(values.shape[0], -1)
-    filled = np.stack([np.interp(frames, frames[known], flat[known, k])
-                       for k in range(flat.shape[1])], axis=1)
-    return filled.reshape(values.shape)
+    flat = values.reshape(values.shape[0], -1).copy()
+    unknown = np.flatnonzero(~known)
+    for column in flat.T:
+        column[unknown] = np.interp(unknown, frames[known], column[known])
+    return flat.reshape(values.shape)
+
+
+def _median(points: np.ndarray) -> np.ndarray:
+    """The median ``(K, 2)`` of ``(N, K, 2)`` points over ``N``, NaN ignored."""
+    return np.nanmedian(points, axis=0) if np.isnan(points).any() else np.median(points, axis=0)
 
 
 def palm_motion(uv: np.ndarray, missing: np.ndarray, skeleton: Skeleton) -> PalmMotion | None:
@@ -94,8 +102,8 @@ def palm_motion(uv: np.ndarray, missing: np.ndarray, skeleton: Skeleton) -> Palm
         canonical = apply_linear(inverse, np.nan_to_num(shape_points) - offset[:, None])
         canonical = np.where((shape_seen & shaping[:, None])[..., None], canonical, np.nan)
         seen_once = ~np.isnan(canonical[..., 0]).all(axis=0)
-        reference = np.where(seen_once[:, None], np.nanmedian(
-            np.where(seen_once[None, :, None], canonical, 0.0), axis=0), reference)
+        reference = np.where(seen_once[:, None], _median(
+            np.where(seen_once[None, :, None], canonical, 0.0)), reference)
     linear, offset, kind = fit_maps_from_shape(reference, points, seen)
     fitted = kind == AFFINE
     if not fitted.any():
@@ -115,9 +123,16 @@ def palm_motion(uv: np.ndarray, missing: np.ndarray, skeleton: Skeleton) -> Palm
 
 def to_palm_frame(uv: np.ndarray, motion: PalmMotion) -> np.ndarray:
     """Express image points in the palm frame, ``(T, J, 2) -> (T, J, 2)``."""
-    return apply_linear(inverse_2x2(motion.linear), uv - motion.offset[:, None])
+    inverse = inverse_2x2(motion.linear)
+    return apply_affine(inverse, -apply_linear(inverse, motion.offset), uv)
 
 
-def to_image(points: np.ndarray, motion: PalmMotion) -> np.ndarray:
-    """Map palm-frame points back to the image, ``(T, J, 2) -> (T, J, 2)`` pixels."""
-    return apply_linear(motion.linear, points) + motion.offset[:, None]
+def to_image(points: np.ndarray, motion: PalmMotion, frame: np.ndarray | None = None
+             ) -> np.ndarray:
+    """Map palm-frame points back to the image, pixels.
+
+    ``points`` are ``(T, J, 2)``, or ``(N, 2)`` seen in frames ``frame`` ``(N,) int64``.
+    """
+    if frame is None:
+        return apply_affine(motion.linear, motion.offset, points)
+    return apply_linear(motion.linear[frame], points) + motion.offset[frame]

@@ -44,20 +44,24 @@ def bone_bounds(
     Returns
     -------
     numpy.ndarray
-        ``(T, B) float64``, pixels; ``inf`` where nothing bounds the bone.
+        ``(T, B) float64``, pixels; ``inf`` where nothing bounds the bone (a read-only
+        view when no bound varies from frame to frame).
     """
     parent, child = skeleton.bones.T
-    projected = np.linalg.norm(uv[:, child] - uv[:, parent], axis=-1)
-    both_seen = ~missing[:, child] & ~missing[:, parent]
-    longest_seen = np.max(np.where(both_seen, projected, -np.inf), axis=0)
-    bounds = np.where(np.isfinite(longest_seen), longest_seen * LENGTH_SLACK, np.inf)
-    bounds = np.broadcast_to(bounds, projected.shape).copy()
+    bone = np.take(uv, child, axis=1) - np.take(uv, parent, axis=1)
+    squared = bone[..., 0] ** 2 + bone[..., 1] ** 2
+    either_missing = np.take(missing, child, axis=1) | np.take(missing, parent, axis=1)
+    squared[either_missing] = -1.0
+    longest_seen = squared.max(axis=0, initial=-1.0)
+    bounds = np.where(longest_seen >= 0, np.sqrt(np.maximum(longest_seen, 0.0)) * LENGTH_SLACK,
+                      np.inf)
+    n_frames = uv.shape[0]
     if bone_lengths and scale is not None:
         lengths = np.array([bone_lengths.get(name, np.inf) for name in skeleton.bone_names])
         per_frame = np.broadcast_to(np.asarray(scale, dtype=np.float64).reshape(-1, 1),
-                                    (projected.shape[0], 1))
+                                    (n_frames, 1))
         bounds = np.where(np.isfinite(lengths), per_frame * lengths, bounds)
-    return bounds
+    return np.broadcast_to(bounds, (n_frames, bounds.shape[-1]))
 
 
 def refine_bone_lengths(

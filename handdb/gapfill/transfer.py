@@ -25,7 +25,15 @@ def apply_linear(linear: np.ndarray, points: np.ndarray) -> np.ndarray:
     """Apply ``(N, 2, 2)`` linear maps to ``(N, 2)`` or ``(N, K, 2)`` points, one map each."""
     if points.ndim == 2:
         return np.einsum("nij,nj->ni", linear, points)
-    return points @ np.swapaxes(linear, 1, 2)
+    return np.matmul(points, np.ascontiguousarray(np.swapaxes(linear, 1, 2)))
+
+
+def apply_affine(linear: np.ndarray, offset: np.ndarray, points: np.ndarray) -> np.ndarray:
+    """Apply ``(N, 2, 2)`` linear maps and ``(N, 2)`` offsets to ``(N, K, 2)`` points."""
+    mapped = apply_linear(linear, points)
+    flat = mapped.reshape(len(mapped), -1)
+    flat += np.tile(offset, points.shape[1])
+    return mapped
 
 
 def inverse_2x2(matrices: np.ndarray) -> np.ndarray:
