@@ -11,6 +11,8 @@ joint never observed is placed by fitting the rest pose to the observed joints o
 
 from __future__ import annotations
 
+from functools import cache
+
 import numpy as np
 
 from handdb.gapfill.gaps import Gaps, find_gaps
@@ -29,11 +31,18 @@ MIN_PALM_POINTS = 3
 def palm_joints(skeleton: Skeleton) -> np.ndarray:
     """``(J,) bool``: joints that move with the palm (wrist, palm points, finger bases).
 
-    The thumb's MCP is left out: the thumb's base bone swings on its own.
+    The thumb's MCP is left out: the thumb's base bone swings on its own. The array is
+    shared between calls: read-only.
     """
-    roles = np.asarray(skeleton.roles)
-    fingers = np.asarray(skeleton.fingers)
-    return np.isin(roles, list(PALM_ROLES)) & ~((fingers == "thumb") & (roles == "mcp"))
+    return _palm_joints(skeleton.roles, skeleton.fingers)
+
+
+@cache
+def _palm_joints(roles: tuple[str, ...], fingers: tuple[str, ...]) -> np.ndarray:
+    role, finger = np.asarray(roles), np.asarray(fingers)
+    palm = np.isin(role, list(PALM_ROLES)) & ~((finger == "thumb") & (role == "mcp"))
+    palm.flags.writeable = False
+    return palm
 
 
 def _carriers_of(basis: np.ndarray, joint: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -43,7 +52,7 @@ def _carriers_of(basis: np.ndarray, joint: np.ndarray) -> tuple[np.ndarray, np.n
     most carriers any of the points has, rows with fewer are padded with invalid entries.
     """
     rows = basis & ~np.eye(basis.shape[0], dtype=bool)
-    width = max(int(rows[np.unique(joint)].sum(axis=1).max(initial=0)), 1)
+    width = max(int(rows.sum(axis=1)[joint].max(initial=0)), 1)
     carriers = np.argsort(~rows, axis=1, kind="stable")[:, :width]
     return carriers[joint], np.take_along_axis(rows, carriers, axis=1)[joint]
 
@@ -159,17 +168,24 @@ def parent_bones(skeleton: Skeleton) -> np.ndarray:
     """``(J, J) bool``: row ``j``, the joints that carry joint ``j`` along its parent bone.
 
     Those are its parent and grandparent; the palm joints for a joint hanging from the root
-    (its parent bone is the palm); none for the root.
+    (its parent bone is the palm); none for the root. The array is shared between calls:
+    read-only.
     """
-    carriers = np.zeros((skeleton.n_joints, skeleton.n_joints), dtype=bool)
-    for joint, parent in enumerate(skeleton.parents):
+    return _parent_bones(tuple(skeleton.parents), palm_joints(skeleton).tobytes())
+
+
+@cache
+def _parent_bones(parents: tuple[int, ...], palm: bytes) -> np.ndarray:
+    carriers = np.zeros((len(parents), len(parents)), dtype=bool)
+    for joint, parent in enumerate(parents):
         if parent < 0:
             continue
-        grandparent = skeleton.parents[parent]
+        grandparent = parents[parent]
         if grandparent < 0:
-            carriers[joint] = palm_joints(skeleton)
+            carriers[joint] = np.frombuffer(palm, dtype=bool)
         else:
             carriers[joint, [parent, grandparent]] = True
+    carriers.flags.writeable = False
     return carriers
 
 

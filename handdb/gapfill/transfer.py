@@ -51,11 +51,12 @@ def _member_bits(members: np.ndarray) -> np.ndarray:
 def _centred(points: np.ndarray, weights: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Return the weighted mean ``(N, 2)`` of ``(N, K, 2)`` points and the points about it.
 
-    ``weights`` is ``(N, K)``, 0 or 1; centred points are 0 where their weight is 0.
+    ``weights`` is ``(N, K) bool``; centred points are 0 where their weight is 0.
     """
-    clean = np.nan_to_num(points)
-    mean = np.einsum("nk,nkd->nd", weights, clean) / np.maximum(weights.sum(axis=1), 1)[:, None]
-    return mean, (clean - mean[:, None]) * weights[..., None]
+    taking_part = weights[..., None]
+    clean = np.where(taking_part, points, 0.0)
+    mean = clean.sum(axis=1) / np.maximum(weights.sum(axis=1), 1)[:, None]
+    return mean, np.where(taking_part, clean - mean[:, None], 0.0)
 
 
 def _well_spread(covariance: np.ndarray) -> np.ndarray:
@@ -95,10 +96,9 @@ def fit_maps(
         :data:`SIMILARITY` (2 points, or collinear ones), :data:`TRANSLATION` (1 point) or
         :data:`NO_MAP` (none).
     """
-    w = weights.astype(np.float64)
     count = weights.sum(axis=1)
-    src_mean, src = _centred(source, w)
-    dst_mean, dst = _centred(target, w)
+    src_mean, src = _centred(source, weights)
+    dst_mean, dst = _centred(target, weights)
     src_cov = np.swapaxes(src, 1, 2) @ src
     cross = np.swapaxes(dst, 1, 2) @ src
 
@@ -109,7 +109,7 @@ def fit_maps(
                      where=turns)
     imaginary = np.divide(cross[:, 1, 0] - cross[:, 0, 1], spread,
                           out=np.zeros_like(spread), where=turns)
-    linear = np.stack([np.stack([real, -imaginary], -1), np.stack([imaginary, real], -1)], -2)
+    linear = np.stack([real, -imaginary, imaginary, real], axis=-1).reshape(-1, 2, 2)
 
     kind = np.minimum(count, SIMILARITY)
     if affine:
