@@ -39,7 +39,6 @@ frames/s orthographic (about 12 000 before the vectorised scan) on a shared core
 
 from __future__ import annotations
 
-import itertools
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
@@ -58,11 +57,11 @@ from handdb.lifting.geometry import (
     depth_magnitudes,
     eq6_scale,
     orthographic_points,
-    path_matrix,
     projected_lengths,
 )
-from handdb.lifting.hand_layout import HandLayout, hand_layout
+from handdb.lifting.hand_layout import hand_layout
 from handdb.lifting.hand_prior import SIGN_STATES, score_fingers
+from handdb.lifting.palm import palm_signs
 from handdb.lifting.pinhole import camera_rays, estimate_root_depth, walk_rays
 from handdb.lifting.registry import register
 from handdb.lifting.result import LiftResult
@@ -72,10 +71,6 @@ from handdb.skeletons import Skeleton
 #: Rounds of root depth and sign estimation for a pinhole clip (each round's signs give
 #: the next round's root depth).
 PINHOLE_PASSES = 2
-
-#: Ridge added to the palm plane's normal equations (clip units²) so that a palm seen
-#: edge-on, its joints on one image line, still has a plane.
-PLANE_RIDGE = 1e-9
 
 #: The scale of a frame lets its most stretched bone be an outlier (see
 #: :func:`handdb.lifting.geometry.eq6_scale`): trackers' bones vary in length.
@@ -91,66 +86,6 @@ MIRROR_SETTLED_ODDS = 20.0
 #: (an opposed thumb) or a mis-tracked one cannot outvote the others (on the real DHG
 #: capture the thumb alone, confidently wrong, flipped the palm for half the clip).
 FINGER_VOTE_CAP = 4.0
-
-
-def palm_signs(xy: np.ndarray, abs_dz: np.ndarray, skeleton: Skeleton,
-               layout: HandLayout) -> np.ndarray:
-    """Sign pattern of the palm's bones that best fits a plane, per frame.
-
-    Parameters
-    ----------
-    xy
-        ``(T, J, 2) float64``, clip units, image-plane positions.
-    abs_dz
-        ``(T, J) float64``, clip units, unsigned bone depths.
-    skeleton, layout
-        The clip's skeleton, its palm and fingers.
-
-    Returns
-    -------
-    numpy.ndarray
-        ``(T, P) float64`` of ±1 for ``layout.palm_bones``; the mirror pattern (all signs
-        flipped) fits exactly as well and is the palm's other state. Patterns are
-        oriented so that the palm's tilt changes continuously from frame to frame
-        (:func:`continuity_signs`): a frame's state 0 continues the previous one's.
-    """
-    bones = layout.palm_bones
-    joints = np.concatenate([[skeleton.root], bones])
-    to_depth = path_matrix(skeleton)[np.ix_(joints, bones)]             # (Q, P)
-    # Half the patterns suffice: a pattern and its mirror fit the plane equally well.
-    combos = np.array(list(itertools.product((1.0, -1.0), repeat=len(bones) - 1)))
-    combos = np.concatenate([np.ones((len(combos), 1)), combos], axis=1)
-    design = np.concatenate([np.nan_to_num(xy[:, joints]),
-                             np.ones((len(xy), len(joints), 1))], axis=-1)  # (T, Q, 3)
-    fit = np.linalg.solve(np.swapaxes(design, 1, 2) @ design + PLANE_RIDGE * np.eye(3),
-                          np.swapaxes(design, 1, 2))                    # (T, 3, Q)
-    residual = np.eye(len(joints)) - design @ fit                        # (T, Q, Q)
-    spans = np.nan_to_num(abs_dz[:, bones])[:, None, :] * to_depth       # (T, Q, P)
-    quadratic = np.swapaxes(spans, 1, 2) @ residual @ spans              # (T, P, P)
-    misfit = np.sum((quadratic @ combos.T) * combos.T, axis=1)          # (T, C)
-    best = np.argmin(misfit, axis=1)
-    depths = spans @ combos[best][..., None]                             # (T, Q, 1)
-    return combos[best] * continuity_signs(depths[..., 0])[:, None]
-
-
-def continuity_signs(depths: np.ndarray) -> np.ndarray:
-    """Signs that make a sequence of palm poses, each known up to its mirror, continuous.
-
-    Parameters
-    ----------
-    depths
-        ``(T, Q) float64``: depth of each palm joint relative to the root, per frame, with
-        an arbitrary overall sign.
-
-    Returns
-    -------
-    numpy.ndarray
-        ``(T,) float64`` of ±1 such that consecutive signed palm depths never point apart
-        (their dot product is not negative).
-    """
-    turn = np.ones(len(depths))
-    turn[1:] = np.where(np.sum(depths[1:] * depths[:-1], axis=-1) < 0, -1.0, 1.0)
-    return np.cumprod(turn)
 
 
 @dataclass(frozen=True)

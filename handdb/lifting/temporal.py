@@ -26,6 +26,9 @@ SCALE_PERCENTILE = 75.0
 #: Standard deviation of the Gaussian smoothing the scale, frames.
 SCALE_SMOOTHING_FRAMES = 3.0
 
+#: A message passes a flip that costs this many nats more than its own log-odds unchanged.
+SETTLED_NATS = 40.0
+
 #: Posterior log-odds are clipped to this magnitude (a probability of 1 − 1e-13).
 MAX_LOG_ODDS = 30.0
 
@@ -85,7 +88,13 @@ def _log_add_exp(a: float, b: float) -> float:
 
 @numba.njit(cache=True, nogil=True, error_model="numpy")
 def _pass_on(log_odds: float, flip_cost: float) -> float:
-    """Log-odds of a chain's next state given its current state's log-odds."""
+    """Log-odds of a chain's next state given its current state's log-odds.
+
+    Equal to ``log_odds`` to within ``e^-SETTLED_NATS`` while the flip costs that much more
+    than the odds (a steep bone keeps its sign), which skips the logarithms.
+    """
+    if flip_cost - abs(log_odds) > SETTLED_NATS:
+        return log_odds
     return _log_add_exp(log_odds, -flip_cost) - _log_add_exp(log_odds - flip_cost, 0.0)
 
 
