@@ -25,6 +25,8 @@ Each filled point is labelled with the rule that filled it (``rigid``, ``pchip``
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+
 import numpy as np
 
 from handdb.gapfill.gaps import Gaps, find_gaps
@@ -33,7 +35,7 @@ from handdb.gapfill.lowrank import DEFAULT_VARIANCE, blend_to_edges, lowrank_rec
 from handdb.gapfill.palm_frame import palm_motion, to_image, to_palm_frame
 from handdb.gapfill.refine import refine_bone_lengths
 from handdb.gapfill.registry import OFFLINE, MethodOutput, register
-from handdb.gapfill.regression import Samples, regression_estimates, regression_samples
+from handdb.gapfill.regression import regression_estimates, regression_samples
 from handdb.gapfill.rigid import carry_along_chains, palm_joints, place_from_rest_pose
 from handdb.skeletons import Skeleton
 
@@ -55,11 +57,11 @@ VALIDATION_GAPS = 3
 
 
 def estimate_long_gaps(
-    estimates: tuple[str, ...], local: np.ndarray, filled: np.ndarray, missing: np.ndarray,
-    gaps: Gaps, skeleton: Skeleton, variance: float = DEFAULT_VARIANCE,
-    samples: Samples | None = None,
-) -> list[np.ndarray]:
-    """Estimate the points of long finger ``gaps`` by each of ``estimates``.
+    estimates: tuple[str, ...], local: np.ndarray, filled: np.ndarray,
+    problems: Sequence[tuple[np.ndarray, Gaps]], skeleton: Skeleton,
+    variance: float = DEFAULT_VARIANCE,
+) -> list[list[np.ndarray]]:
+    """Estimate the points of long finger gaps by each of ``estimates``.
 
     Parameters
     ----------
@@ -69,38 +71,39 @@ def estimate_long_gaps(
         (:func:`~handdb.gapfill.regression.regression_estimates` on the finger joints, the
         chain where it cannot) and ``"lowrank"`` (:mod:`handdb.gapfill.lowrank`).
     local
-        ``(T, J, 2)`` tracks in the palm frame, NaN where missing (read by ``"lowrank"``).
+        ``(T, J, 2)`` tracks in the palm frame (read by ``"lowrank"`` where observed).
     filled
-        ``local`` with the palm points and every gap filled by interpolation; only the
-        points that ``missing`` leaves observed, and the filled palm points, are read.
-    missing, gaps, skeleton, variance
-        The missing points, the gaps to fill, the skeleton, the low-rank variance share.
-    samples
-        The regression's samples of ``filled`` (:func:`finger_samples`), gathered with
-        ``missing`` or fewer points missing; gathered here when ``None``.
+        ``local`` with the palm points and every gap filled by interpolation.
+    problems
+        ``(missing, gaps)`` pairs: ``(T, J) bool`` points taken as missing (those of the
+        clip, and maybe observed ones hidden on purpose) and the gaps to estimate. The
+        problems' regressions are solved together.
+    skeleton, variance
+        The skeleton, the low-rank variance share.
 
     Returns
     -------
-    list of numpy.ndarray
-        ``(N, 2) float64`` each: the estimates at the points of ``gaps.frames()``, in order.
+    list of list of numpy.ndarray
+        Per problem, per estimate, ``(N, 2) float64``: the estimates at the points of
+        ``gaps.frames()``, in order.
     """
-    _, frame, joint = gaps.frames()
-    chain = carry_along_chains(filled, missing, gaps, skeleton)[frame, joint]
-    results = {"chain": chain}
+    points = [gaps.frames()[1:] for _, gaps in problems]
+    chains = [carry_along_chains(filled, missing, gaps, skeleton)[frame, joint]
+              for (missing, gaps), (frame, joint) in zip(problems, points, strict=True)]
+    results: list[dict[str, np.ndarray]] = [{"chain": chain} for chain in chains]
     if "regression" in estimates:
-        if samples is None:
-            samples = finger_samples(filled, missing, skeleton)
-        regressed = regression_estimates(samples, missing, gaps, ~palm_joints(skeleton))
-        results["regression"] = np.where(np.isnan(regressed), chain, regressed)
+        fingers = ~palm_joints(skeleton)
+        missing_in_all = np.logical_and.reduce([missing for missing, _ in problems])
+        samples = regression_samples(filled, missing_in_all, np.flatnonzero(fingers))
+        regressed = regression_estimates(samples, fingers, problems)
+        for result, chain, estimate in zip(results, chains, regressed, strict=True):
+            result["regression"] = np.where(np.isnan(estimate), chain, estimate)
     if "lowrank" in estimates:
-        model = lowrank_reconstruct(local, missing, variance=variance)
-        results["lowrank"] = blend_to_edges(filled, model, gaps)[frame, joint]
-    return [results[name] for name in estimates]
-
-
-def finger_samples(filled: np.ndarray, missing: np.ndarray, skeleton: Skeleton) -> Samples:
-    """The regression's samples of the joints that are not palm points (its predictors)."""
-    return regression_samples(filled, missing, np.flatnonzero(~palm_joints(skeleton)))
+        for result, (missing, gaps), (frame, joint) in zip(results, problems, points,
+                                                           strict=True):
+            model = lowrank_reconstruct(local, missing, variance=variance)
+            result["lowrank"] = blend_to_edges(filled, model, gaps)[frame, joint]
+    return [[result[name] for name in estimates] for result in results]
 
 
 def validation_mask(missing: np.ndarray, gaps: Gaps, seed: int = 0) -> np.ndarray:
@@ -136,22 +139,20 @@ def _long_gap_fill(
     _, frame, joint = gaps.frames()
     blended = filled.copy()
     if rule != "validated":
-        blended[frame, joint] = estimate_long_gaps((rule,), local, filled, missing, gaps,
-                                                   skeleton, variance)[0]
+        blended[frame, joint] = estimate_long_gaps((rule,), local, filled, [(missing, gaps)],
+                                                   skeleton, variance)[0][0]
         return blended
-    samples = finger_samples(filled, missing, skeleton)
     hidden = validation_mask(missing, gaps)
     runs = find_gaps(hidden)
-    trials = estimate_long_gaps(VALIDATED_ESTIMATES, local, filled, missing | hidden, runs,
-                                skeleton, variance, samples)
+    trials, estimates = estimate_long_gaps(VALIDATED_ESTIMATES, local, filled,
+                                           [(missing | hidden, runs), (missing, gaps)],
+                                           skeleton, variance)
     _, hidden_frame, hidden_joint = runs.frames()
     truth = local[hidden_frame, hidden_joint]
     errors = np.array([np.bincount(hidden_joint, np.sum((trial - truth) ** 2, axis=-1),
                                    minlength=missing.shape[1]) for trial in trials])
     inverse = 1.0 / np.maximum(errors, np.finfo(float).tiny)
     weights = np.where(hidden.any(axis=0), inverse / inverse.sum(axis=0), 1.0 / len(trials))
-    estimates = estimate_long_gaps(VALIDATED_ESTIMATES, local, filled, missing, gaps, skeleton,
-                                   variance, samples)
     blended[frame, joint] = np.sum(weights[:, joint, None] * np.stack(estimates), axis=0)
     return blended
 

@@ -16,6 +16,7 @@ are masks over a padded window, and the stacked normal equations are solved toge
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -103,55 +104,72 @@ def regression_samples(uv: np.ndarray, missing: np.ndarray, columns: np.ndarray)
     return Samples(columns, centre, values)
 
 
-def _training_frames(missing_bits: np.ndarray, gaps: Gaps, needed: np.ndarray) -> np.ndarray:
+def _training_frames(
+    missing_bits: np.ndarray, problem: np.ndarray, gaps: Gaps, needed: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
     """Find the frames within :data:`WINDOW` of each gap where its ``needed`` columns are seen.
 
-    ``missing_bits`` ``(T,) int64`` has bit ``c`` set where column ``c`` is missing;
-    ``needed`` ``(G, C) bool`` marks the columns that must be observed in a training frame.
-    Returns ``(G, F) int64`` rows of ``samples.values``: each gap's training frames, first,
-    then the "no sample" row ``T`` up to the width ``F`` of the widest training set.
+    Parameters
+    ----------
+    missing_bits
+        ``(P, T) int64``: for each problem, bit ``c`` set where column ``c`` is missing.
+    problem
+        ``(G,) int64``: the problem of each gap.
+    gaps
+        The gaps.
+    needed
+        ``(G, C) bool``: the columns that must be observed in a training frame.
+
+    Returns
+    -------
+    rows
+        ``(G, F) int64`` rows of ``samples.values``: each gap's training frames, first, then
+        the "no sample" row ``T`` up to the width ``F`` of the widest training set.
+    count
+        ``(G,) int64``: the number of training frames of each gap.
     """
     n_frames = gaps.n_frames
     low = np.maximum(gaps.start - WINDOW, 0)
     high = np.minimum(gaps.stop + WINDOW, n_frames)
-    window = low[:, None] + np.arange(np.max(high - low))
+    window = low[:, None] + np.arange(np.max(high - low, initial=0))
     inside = window < high[:, None]
     window = np.minimum(window, n_frames - 1)
-    train = inside & ((missing_bits[window] & _bit_sets(needed)[:, None]) == 0)
-    rows = np.sort(np.where(train, window, n_frames), axis=1)
-    return rows[:, :max(int(train.sum(axis=1).max()), 1)]
+    train = inside & ((missing_bits[problem[:, None], window]
+                       & _bit_sets(needed)[:, None]) == 0)
+    count = train.sum(axis=1)
+    gap, slot = np.nonzero(train)
+    rows = np.full((len(gaps), max(int(count.max(initial=0)), 1)), n_frames)
+    rows[gap, np.arange(gap.size) - np.repeat(np.cumsum(count) - count, count)] = window[gap, slot]
+    return rows, count
 
 
 def _predict_gaps(
-    samples: Samples, missing_bits: np.ndarray, gaps: Gaps, usable: np.ndarray
-) -> tuple[np.ndarray, np.ndarray]:
+    samples: Samples, x: np.ndarray, gaps: Gaps, usable: np.ndarray, span: int
+) -> np.ndarray:
     """Fit each gap's ridge regression and predict its joint around and in the gap.
 
     Parameters
     ----------
     samples
         The clip's coordinates (:func:`regression_samples`).
-    missing_bits
-        ``(T,) int64``: bit ``c`` set where joint ``samples.columns[c]`` is missing.
+    x
+        ``(G, F, 2 C + 1) float64``: each gap's training rows of ``samples.values``.
     gaps
         ``G`` gaps, each of a joint among ``samples.columns``.
     usable
         ``(G, C) bool``: each gap's predictor joints, among ``samples.columns``.
+    span
+        Frames predicted per gap, at least its length plus 2.
 
     Returns
     -------
-    predicted
-        ``(G, L + 2, 2) float64``, pixels: predictions at frames ``start - 1`` to ``stop``
-        of each gap (clipped into the clip; ``L`` the longest gap).
-    ok
-        ``(G,) bool``: the gap had a predictor and enough training frames.
+    numpy.ndarray
+        ``(G, span, 2) float64``, pixels: predictions at frames ``start - 1`` onward of
+        each gap (clipped into the clip).
     """
     target = np.searchsorted(samples.columns, gaps.joint)
-    own = np.arange(samples.columns.size) == target[:, None]
-    x = samples.values[_training_frames(missing_bits, gaps, usable | own)]
     moments = np.swapaxes(x, 1, 2) @ x
-    n_train = moments[:, -1, -1]
-    n = np.maximum(n_train, 1.0)[:, None]
+    n = np.maximum(moments[:, -1, -1], 1.0)[:, None]
     mean = moments[:, :-1, -1] / n
     scatter = moments[:, :-1, :-1] - n[..., None] * mean[:, :, None] * mean[:, None, :]
     use = np.repeat(usable, 2, axis=1)
@@ -162,13 +180,10 @@ def _predict_gaps(
     gram += (RIDGE * n)[..., None] * np.eye(use.shape[1])
     cross = np.take_along_axis(scatter, coordinates[:, None, :], axis=2) / spread[..., None]
     weights = np.linalg.solve(gram, cross)
-    around = np.clip(gaps.start[:, None] - 1 + np.arange(np.max(gaps.length) + 2), 0,
-                     gaps.n_frames - 1)
+    around = np.clip(gaps.start[:, None] - 1 + np.arange(span), 0, gaps.n_frames - 1)
     standard = (samples.values[around, :-1] - mean[:, None]) / spread[:, None]
     offset = np.take_along_axis(mean, coordinates, axis=1) + samples.centre[coordinates]
-    predicted = standard @ weights + offset[:, None]
-    ok = usable.any(axis=1) & (n_train >= MIN_TRAINING_FRAMES)
-    return predicted, ok
+    return standard @ weights + offset[:, None]
 
 
 def _blend_to_edges(
@@ -192,53 +207,70 @@ def _blend_to_edges(
 
 
 def regression_estimates(
-    samples: Samples, missing: np.ndarray, gaps: Gaps, predictors: np.ndarray
-) -> np.ndarray:
-    """Estimate the points of ``gaps`` by ridge regression on the predictors seen throughout.
+    samples: Samples, predictors: np.ndarray, problems: Sequence[tuple[np.ndarray, Gaps]]
+) -> list[np.ndarray]:
+    """Estimate the points of gaps by ridge regression on the predictors seen throughout.
+
+    Several problems, each a set of gaps with the points that are missing around them, are
+    solved in shared batches (gaps of similar training-set sizes together).
 
     Parameters
     ----------
     samples
         The clip's coordinates (:func:`regression_samples`), reading the gaps' joints and
-        the ``predictors``; gathered with ``missing`` or fewer points missing.
-    missing
-        ``(T, J) bool``: points that are not observed; neither predictors nor training
-        samples are taken from them.
-    gaps
-        Non-whole-clip gaps of joints among ``samples.columns``.
+        the ``predictors``; gathered with no more points missing than any problem has.
     predictors
         ``(J,) bool``: joints that may serve as predictors.
+    problems
+        ``(missing, gaps)`` pairs: ``(T, J) bool`` points that are not observed (neither
+        predictors nor training samples are taken from them), and the non-whole-clip gaps
+        to estimate, of joints among ``samples.columns``.
 
     Returns
     -------
-    numpy.ndarray
-        ``(N, 2) float64``, pixels: the estimates at the points of ``gaps.frames()``, in
-        order; NaN where a gap had no predictor seen throughout it or too few training
-        frames.
+    list of numpy.ndarray
+        Per problem, ``(N, 2) float64``, pixels: the estimates at the points of
+        ``gaps.frames()``, in order; NaN where a gap had no predictor seen throughout it or
+        too few training frames.
     """
-    n_frames = missing.shape[0]
+    if not any(len(part) for _, part in problems):
+        return [np.empty((0, 2)) for _ in problems]
     columns = samples.columns
-    missing_columns = missing[:, columns]
-    missing_so_far = np.zeros((n_frames + 1, columns.size), dtype=np.int32)
-    np.cumsum(missing_columns, axis=0, out=missing_so_far[1:])
-    missing_bits = _bit_sets(missing_columns)
-    low, high = samples.observed_range(~missing_columns)
-    margin = RANGE_MARGIN * (high - low)
-    estimates = np.empty((int(gaps.length.sum()), 2))
-    done = 0
-    for batch in np.array_split(np.arange(len(gaps)), -(-len(gaps) // BATCH_GAPS)):
-        part = gaps.select(batch)
+    n_frames = samples.values.shape[0] - 1
+    gaps = Gaps(*(np.concatenate([getattr(part, name) for _, part in problems])
+                  for name in ("joint", "start", "stop")), n_frames)
+    problem = np.repeat(np.arange(len(problems)), [len(part) for _, part in problems])
+    missing_bits = np.empty((len(problems), n_frames), dtype=np.int64)
+    low = np.empty((len(problems), 2 * columns.size))
+    high = np.empty_like(low)
+    usable = np.empty((len(gaps), columns.size), dtype=bool)
+    for index, (missing, part) in enumerate(problems):
+        missing_columns = missing[:, columns]
+        missing_so_far = np.zeros((n_frames + 1, columns.size), dtype=np.int32)
+        np.cumsum(missing_columns, axis=0, out=missing_so_far[1:])
         first = missing_so_far[np.maximum(part.start - 1, 0)]
         last = missing_so_far[np.minimum(part.stop + 1, n_frames)]
-        usable = (first == last) & predictors[columns] & (columns != part.joint[:, None])
-        predicted, ok = _predict_gaps(samples, missing_bits, part, usable)
-        gap, frame, joint = part.frames()
-        pair = 2 * np.searchsorted(columns, joint)[:, None] + np.arange(2)
-        estimate = np.clip(_blend_to_edges(samples, part, predicted, gap, frame - part.start[gap]),
-                           (low - margin)[pair], (high + margin)[pair])
-        estimates[done:done + gap.size] = np.where(ok[gap, None], estimate, np.nan)
-        done += gap.size
-    return estimates
+        usable[problem == index] = ((first == last) & predictors[columns]
+                                    & (columns != part.joint[:, None]))
+        missing_bits[index] = _bit_sets(missing_columns)
+        low[index], high[index] = samples.observed_range(~missing_columns)
+    own = np.arange(columns.size) == np.searchsorted(columns, gaps.joint)[:, None]
+    rows, count = _training_frames(missing_bits, problem, gaps, usable | own)
+    span = int(np.max(gaps.length, initial=0)) + 2
+    predicted = np.empty((len(gaps), span, 2))
+    by_size = np.argsort(count, kind="stable")
+    for batch in np.array_split(by_size, -(-len(gaps) // BATCH_GAPS)):
+        x = samples.values[rows[batch, :max(int(count[batch].max()), 1)]]
+        predicted[batch] = _predict_gaps(samples, x, gaps.select(batch), usable[batch], span)
+    ok = usable.any(axis=1) & (count >= MIN_TRAINING_FRAMES)
+    gap, frame, joint = gaps.frames()
+    coordinate = (problem[gap][:, None], 2 * np.searchsorted(columns, joint)[:, None]
+                  + np.arange(2))
+    margin = RANGE_MARGIN * (high - low)[coordinate]
+    estimate = np.clip(_blend_to_edges(samples, gaps, predicted, gap, frame - gaps.start[gap]),
+                       low[coordinate] - margin, high[coordinate] + margin)
+    estimate = np.where(ok[gap, None], estimate, np.nan)
+    return np.split(estimate, np.cumsum([part.length.sum() for _, part in problems])[:-1])
 
 
 def regression_fill(
@@ -269,5 +301,5 @@ def regression_fill(
         gap_joints[gaps.joint] = True
         samples = regression_samples(uv, missing, np.flatnonzero(predictors | gap_joints))
         _, frame, joint = gaps.frames()
-        filled[frame, joint] = regression_estimates(samples, missing, gaps, predictors)
+        filled[frame, joint] = regression_estimates(samples, predictors, [(missing, gaps)])[0]
     return filled
