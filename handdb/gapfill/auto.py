@@ -121,10 +121,12 @@ def validation_mask(missing: np.ndarray, gaps: Gaps, seed: int = 0) -> np.ndarra
     rng = np.random.default_rng(seed)
     n_frames = missing.shape[0]
     hidden = np.zeros_like(missing)
+    missing_so_far = np.zeros((missing.shape[1], n_frames + 1), dtype=np.int32)
+    np.cumsum(missing.T, axis=1, out=missing_so_far[:, 1:])
     for joint in np.unique(gaps.joint):
         length = int(min(np.median(gaps.length[gaps.joint == joint]), n_frames // 4))
-        window = np.ones(length + 2)
-        clear = np.convolve(~missing[:, joint], window, mode="valid") == window.size
+        so_far = missing_so_far[joint]
+        clear = so_far[length + 2:] == so_far[:n_frames - length - 1]
         starts = np.flatnonzero(clear) + 1
         for start in rng.permutation(starts)[:VALIDATION_GAPS]:
             hidden[start:start + length, joint] |= ~hidden[start - 1:start + length + 1,
