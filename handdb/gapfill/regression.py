@@ -35,6 +35,8 @@ RANGE_MARGIN = 0.25
 MIN_SPREAD = 1e-6
 #: Gaps whose regressions are stacked in one batch (bounds the memory of the samples).
 BATCH_GAPS = 64
+#: Frames per block of the running moment sums over the frames every regression trains on.
+BLOCK = 32
 
 
 @dataclass(frozen=True)
@@ -104,9 +106,60 @@ def regression_samples(uv: np.ndarray, missing: np.ndarray, columns: np.ndarray)
     return Samples(columns, centre, values)
 
 
+def _block_moments(values: np.ndarray, complete: np.ndarray) -> np.ndarray:
+    """Running sums of the moments of the ``complete`` frames, at every :data:`BLOCK` frames.
+
+    Parameters
+    ----------
+    values
+        ``(T + 1, D) float64``: ``Samples.values``.
+    complete
+        ``(T,) bool``: frames to sum.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(T // BLOCK + 1, D, D) float64``: entry ``b`` sums the outer products of the rows
+        of the complete frames before frame ``b * BLOCK``.
+    """
+    n_blocks = complete.size // BLOCK
+    framed = n_blocks * BLOCK
+    x = np.where(complete[:framed, None], values[:framed], 0.0).reshape(n_blocks, BLOCK, -1)
+    running = np.zeros((n_blocks + 1, x.shape[2], x.shape[2]))
+    np.cumsum(np.swapaxes(x, 1, 2) @ x, axis=0, out=running[1:])
+    return running
+
+
+@dataclass(frozen=True)
+class _Training:
+    """The frames each gap's regression trains on.
+
+    The frames every problem sees in full (``complete``) that fill whole blocks of the
+    window are summed from :func:`_block_moments`; the others are listed in ``rows``.
+
+    Attributes
+    ----------
+    rows
+        ``(G, F) int64`` rows of ``Samples.values``: each gap's listed frames, first, then
+        the "no sample" row ``T`` up to the width ``F`` of the longest list.
+    n_rows
+        ``(G,) int64``: listed frames of each gap.
+    n_train
+        ``(G,) int64``: training frames of each gap, listed or summed.
+    blocks
+        ``(G, 2) int64``: the first and one past the last block summed for each gap.
+    """
+
+    rows: np.ndarray
+    n_rows: np.ndarray
+    n_train: np.ndarray
+    blocks: np.ndarray
+
+
 def _training_frames(
-    missing_bits: np.ndarray, problem: np.ndarray, gaps: Gaps, needed: np.ndarray
-) -> tuple[np.ndarray, np.ndarray]:
+    missing_bits: np.ndarray, problem: np.ndarray, gaps: Gaps, needed: np.ndarray,
+    complete: np.ndarray,
+) -> _Training:
     """Find the frames within :data:`WINDOW` of each gap where its ``needed`` columns are seen.
 
     Parameters
@@ -119,14 +172,8 @@ def _training_frames(
         The gaps.
     needed
         ``(G, C) bool``: the columns that must be observed in a training frame.
-
-    Returns
-    -------
-    rows
-        ``(G, F) int64`` rows of ``samples.values``: each gap's training frames, first, then
-        the "no sample" row ``T`` up to the width ``F`` of the widest training set.
-    count
-        ``(G,) int64``: the number of training frames of each gap.
+    complete
+        ``(T,) bool``: frames where no problem misses a column (summed by blocks).
     """
     n_frames = gaps.n_frames
     low = np.maximum(gaps.start - WINDOW, 0)
@@ -136,15 +183,21 @@ def _training_frames(
     window = np.minimum(window, n_frames - 1)
     train = inside & ((missing_bits[problem[:, None], window]
                        & _bit_sets(needed)[:, None]) == 0)
-    count = train.sum(axis=1)
-    gap, slot = np.nonzero(train)
-    rows = np.full((len(gaps), max(int(count.max(initial=0)), 1)), n_frames)
-    rows[gap, np.arange(gap.size) - np.repeat(np.cumsum(count) - count, count)] = window[gap, slot]
-    return rows, count
+    blocks = np.stack([-(-low // BLOCK), high // BLOCK], axis=1)
+    blocks[:, 1] = np.maximum(blocks[:, 1], blocks[:, 0])
+    summed = (complete[window] & (window >= BLOCK * blocks[:, :1])
+              & (window < BLOCK * blocks[:, 1:]))
+    listed = train & ~summed
+    n_rows = listed.sum(axis=1)
+    gap, slot = np.nonzero(listed)
+    rows = np.full((len(gaps), max(int(n_rows.max(initial=0)), 1)), n_frames)
+    rows[gap, np.arange(gap.size) - np.repeat(np.cumsum(n_rows) - n_rows, n_rows)] = \
+        window[gap, slot]
+    return _Training(rows, n_rows, train.sum(axis=1), blocks)
 
 
 def _predict_gaps(
-    samples: Samples, x: np.ndarray, gaps: Gaps, usable: np.ndarray, span: int
+    samples: Samples, moments: np.ndarray, gaps: Gaps, usable: np.ndarray, span: int
 ) -> np.ndarray:
     """Fit each gap's ridge regression and predict its joint around and in the gap.
 
@@ -152,8 +205,9 @@ def _predict_gaps(
     ----------
     samples
         The clip's coordinates (:func:`regression_samples`).
-    x
-        ``(G, F, 2 C + 1) float64``: each gap's training rows of ``samples.values``.
+    moments
+        ``(G, D, D) float64``: each gap's sum of the outer products of its training rows
+        of ``samples.values`` (``D = 2 C + 1``).
     gaps
         ``G`` gaps, each of a joint among ``samples.columns``.
     usable
@@ -168,7 +222,6 @@ def _predict_gaps(
         each gap (clipped into the clip).
     """
     target = np.searchsorted(samples.columns, gaps.joint)
-    moments = np.swapaxes(x, 1, 2) @ x
     n = np.maximum(moments[:, -1, -1], 1.0)[:, None]
     mean = moments[:, :-1, -1] / n
     scatter = moments[:, :-1, :-1] - n[..., None] * mean[:, :, None] * mean[:, None, :]
@@ -255,14 +308,19 @@ def regression_estimates(
         missing_bits[index] = _bit_sets(missing_columns)
         low[index], high[index] = samples.observed_range(~missing_columns)
     own = np.arange(columns.size) == np.searchsorted(columns, gaps.joint)[:, None]
-    rows, count = _training_frames(missing_bits, problem, gaps, usable | own)
+    complete = np.bitwise_or.reduce(missing_bits, axis=0) == 0
+    training = _training_frames(missing_bits, problem, gaps, usable | own, complete)
+    running = _block_moments(samples.values, complete)
     span = int(np.max(gaps.length, initial=0)) + 2
     predicted = np.empty((len(gaps), span, 2))
-    by_size = np.argsort(count, kind="stable")
+    by_size = np.argsort(training.n_rows, kind="stable")
     for batch in np.array_split(by_size, -(-len(gaps) // BATCH_GAPS)):
-        x = samples.values[rows[batch, :max(int(count[batch].max()), 1)]]
-        predicted[batch] = _predict_gaps(samples, x, gaps.select(batch), usable[batch], span)
-    ok = usable.any(axis=1) & (count >= MIN_TRAINING_FRAMES)
+        x = samples.values[training.rows[batch, :max(int(training.n_rows[batch].max()), 1)]]
+        first, last = training.blocks[batch].T
+        moments = np.swapaxes(x, 1, 2) @ x + running[last] - running[first]
+        predicted[batch] = _predict_gaps(samples, moments, gaps.select(batch), usable[batch],
+                                         span)
+    ok = usable.any(axis=1) & (training.n_train >= MIN_TRAINING_FRAMES)
     gap, frame, joint = gaps.frames()
     coordinate = (problem[gap][:, None], 2 * np.searchsorted(columns, joint)[:, None]
                   + np.arange(2))
