@@ -65,7 +65,7 @@ from handdb.lifting.palm import palm_signs
 from handdb.lifting.pinhole import camera_rays, estimate_root_depth, walk_rays
 from handdb.lifting.registry import register
 from handdb.lifting.result import LiftResult
-from handdb.lifting.temporal import flip_costs, sigmoid, sign_posterior, smooth_scale
+from handdb.lifting.temporal import acceleration_spread, sigmoid, sign_posterior, smooth_scale
 from handdb.skeletons import Skeleton
 
 #: Rounds of root depth and sign estimation for a pinhole clip (each round's signs give
@@ -149,10 +149,10 @@ def resolve_signs(
     layout = hand_layout(skeleton)
     n_frames = len(xy)
     palm = palm_signs(xy, abs_dz, skeleton, layout)                      # (T, P)
+    palm_dz = np.zeros((n_frames, skeleton.n_joints))
+    palm_dz[:, layout.palm_bones] = palm * abs_dz[:, layout.palm_bones]
+    palm_z = accumulate_depths(palm_dz, skeleton)
     if candidates_for is None:
-        palm_dz = np.zeros((n_frames, skeleton.n_joints))
-        palm_dz[:, layout.palm_bones] = palm * abs_dz[:, layout.palm_bones]
-        palm_z = accumulate_depths(palm_dz, skeleton)
         candidates = orthographic_candidates(xy, abs_dz, np.stack([palm_z, -palm_z], axis=1),
                                              skeleton, layout)
     else:
@@ -160,17 +160,18 @@ def resolve_signs(
     scores = score_fingers(candidates, bone_lengths, layout, hand)
     votes = np.clip(scores.evidence[:, 0] - scores.evidence[:, 1], -FINGER_VOTE_CAP,
                     FINGER_VOTE_CAP)                                      # (T, F)
-    tilt = np.sqrt(np.nanmean(abs_dz[:, layout.palm_bones] ** 2, axis=1, keepdims=True))
+    palm_depths = palm_z[:, None, layout.palm_bones]                      # (T, 1, P)
     floor = TEMPORAL_FLOOR * np.nanmean(bone_lengths[layout.palm_bones], keepdims=True)
-    palm_odds = sign_posterior(votes.sum(axis=1, keepdims=True), flip_costs(tilt, floor))[:, 0]
+    palm_odds = sign_posterior(votes.sum(axis=1, keepdims=True), palm_depths,
+                               acceleration_spread(palm_depths, floor))[:, 0]
     state = (palm_odds < 0).astype(np.int64)
     frames = np.arange(n_frames)[:, None]
     chosen = scores.bone_log_odds[frames[:, 0], state]                   # (T, F, 3)
 
-    chain_dz = abs_dz[:, layout.chains].reshape(n_frames, -1)            # (T, F * 3)
+    chain_dz = abs_dz[:, layout.chains].reshape(n_frames, -1, 1)         # (T, F * 3, 1)
     floor = TEMPORAL_FLOOR * bone_lengths[layout.chains].ravel()
-    finger_odds = sign_posterior(chosen.reshape(n_frames, -1),
-                                 flip_costs(chain_dz, floor)).reshape(chosen.shape)
+    finger_odds = sign_posterior(chosen.reshape(n_frames, -1), chain_dz,
+                                 acceleration_spread(chain_dz, floor)).reshape(chosen.shape)
     finger_signs = np.where(finger_odds < 0, -1.0, 1.0)
 
     # The mirror flips the palm tilt and every finger state at once. Compare each frame's

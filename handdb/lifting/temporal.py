@@ -1,12 +1,14 @@
 """Temporal consistency of depth signs, and a robust, smooth scale.
 
-A bone's depth sign is a two-state chain over the frames. Keeping the sign from one frame
-to the next costs nothing; flipping it makes the bone's depth jump by ``a + b`` instead of
-``|a − b|`` (``a``, ``b``: its unsigned depth in the two frames), so under Gaussian
-frame-to-frame depth changes of spread ``σ`` a flip costs ``2ab / σ²`` nats: free while the
-bone crosses the image plane, prohibitive while it points steeply toward or away from the
-camera. Posteriors of the chain come from the forward-backward algorithm, its messages
-carried as log-odds in a compiled (numba) scan over the frames.
+A bone's depth sign is a two-state chain over the frames, and so is the palm's tilt. What
+ties consecutive frames together is that the signed value (a bone's depth, the depths of
+the palm's joints) moves smoothly: under a constant-velocity model its second
+frame-to-frame difference is Gaussian. Away from the image plane this makes a flip
+prohibitive (the value would jump by twice its size); where a bone crosses the image
+plane it tells a motion that goes on through it (``+4, +2, −1, −3``) from one that bounces
+back (``+4, +2, +1, +3``), which the unsigned depths alone cannot. Posteriors come from
+the forward-backward algorithm over pairs of consecutive signs, a compiled (numba) scan
+over the frames.
 """
 
 from __future__ import annotations
@@ -26,57 +28,56 @@ SCALE_PERCENTILE = 75.0
 #: Standard deviation of the Gaussian smoothing the scale, frames.
 SCALE_SMOOTHING_FRAMES = 3.0
 
-#: A message passes a flip that costs this many nats more than its own log-odds unchanged.
-SETTLED_NATS = 40.0
-
 #: Posterior log-odds are clipped to this magnitude (a probability of 1 − 1e-13).
 MAX_LOG_ODDS = 30.0
 
 
-def flip_costs(magnitude: np.ndarray, floor: np.ndarray) -> np.ndarray:
-    """Cost in nats of flipping each chain's sign between consecutive frames.
+def acceleration_spread(values: np.ndarray, floor: np.ndarray) -> np.ndarray:
+    """Spread of each chain's second frame-to-frame difference, as the values are oriented.
 
     Parameters
     ----------
-    magnitude
-        ``(T, K) float64``: unsigned depth of ``K`` chains (bones, or the palm's tilt).
+    values
+        ``(T, K, D) float64``: each chain's value under its positive sign; NaN: no value.
     floor
-        ``(K,) float64``: smallest spread of frame-to-frame depth change, same units.
+        ``(K,) float64``: smallest spread, same units, added in quadrature.
 
     Returns
     -------
     numpy.ndarray
-        ``(T, K) float64``: ``2ab / σ²`` between frame ``t − 1`` and ``t`` (row 0: 0), with
-        ``σ²`` the chain's mean squared frame-to-frame change of ``magnitude`` plus
-        ``floor²``.
+        ``(K,) float64``: root mean square of the second differences per component. Taken
+        without sign flips, it errs large (a flip makes one large difference), so the
+        prior it sets is on the weak side.
     """
-    m = np.nan_to_num(magnitude)
-    spread = np.mean(np.diff(m, axis=0) ** 2, axis=0) + floor**2 if len(m) > 1 else floor**2
-    cost = np.zeros(m.shape)
-    cost[1:] = 2.0 * m[1:] * m[:-1] / spread
-    return cost
+    v = np.nan_to_num(values)
+    squared = np.mean(np.diff(v, 2, axis=0) ** 2, axis=(0, 2)) if len(v) > 2 else 0.0
+    return np.sqrt(squared + floor**2)
 
 
-def sign_posterior(log_odds: np.ndarray, flip_cost: np.ndarray) -> np.ndarray:
-    """Posterior log-odds of the positive sign of each chain, given every frame.
+def sign_posterior(log_odds: np.ndarray, values: np.ndarray, spread: np.ndarray) -> np.ndarray:
+    """Posterior log-odds of each chain's positive sign, given every frame.
 
     Parameters
     ----------
     log_odds
         ``(T, K) float64``: each frame's own evidence for the positive sign.
-    flip_cost
-        ``(T, K) float64``: cost of flipping between frame ``t − 1`` and ``t``
-        (:func:`flip_costs`).
+    values
+        ``(T, K, D) float64``: each chain's value under its positive sign (the negative
+        sign negates it); NaN: no value.
+    spread
+        ``(K,) float64``: standard deviation of each component's second frame-to-frame
+        difference (:func:`acceleration_spread`).
 
     Returns
     -------
     numpy.ndarray
-        ``(T, K) float64``.
+        ``(T, K) float64``, clipped to ``±MAX_LOG_ODDS``.
     """
-    # One frame is never surer than MAX_LOG_ODDS: it keeps every message finite.
+    # One frame is never surer than MAX_LOG_ODDS: unbounded evidence would let two certain
+    # frames that disagree make every path impossible.
     evidence = np.clip(np.nan_to_num(log_odds), -MAX_LOG_ODDS, MAX_LOG_ODDS)
     posterior = np.empty(evidence.shape)
-    _forward_backward(evidence, np.broadcast_to(flip_cost, evidence.shape), posterior)
+    _forward_backward(evidence, np.nan_to_num(values), 0.5 / spread**2, posterior)
     return np.clip(posterior, -MAX_LOG_ODDS, MAX_LOG_ODDS)
 
 
@@ -87,34 +88,63 @@ def _log_add_exp(a: float, b: float) -> float:
 
 
 @numba.njit(cache=True, nogil=True, error_model="numpy")
-def _pass_on(log_odds: float, flip_cost: float) -> float:
-    """Log-odds of a chain's next state given its current state's log-odds.
-
-    Equal to ``log_odds`` to within ``e^-SETTLED_NATS`` while the flip costs that much more
-    than the odds (a steep bone keeps its sign), which skips the logarithms.
-    """
-    if flip_cost - abs(log_odds) > SETTLED_NATS:
-        return log_odds
-    return _log_add_exp(log_odds, -flip_cost) - _log_add_exp(log_odds - flip_cost, 0.0)
+def _acceleration_costs(values, weight):
+    """``cost[t, a, b, c]``, nats, of signs ``a, b, c`` (0: +, 1: −) at ``t − 2, t − 1, t``."""
+    n_frames, n_components = values.shape
+    cost = np.zeros((n_frames, 2, 2, 2))
+    for t in range(2, n_frames):
+        for a in range(2):
+            for b in range(2):
+                for c in range(2):
+                    sa, sb, sc = 1.0 - 2.0 * a, 1.0 - 2.0 * b, 1.0 - 2.0 * c
+                    total = 0.0
+                    for d in range(n_components):
+                        x = sc * values[t, d] - 2.0 * sb * values[t - 1, d] + sa * values[t - 2, d]
+                        total += x * x
+                    cost[t, a, b, c] = weight * total
+    return cost
 
 
 @numba.njit(cache=True, nogil=True, error_model="numpy")
-def _forward_backward(evidence, flip_cost, posterior):
-    """Fill ``posterior`` ``(T, K)`` with the log-odds of the forward and backward messages.
+def _forward_backward(evidence, values, weight, posterior):
+    """Fill ``posterior`` ``(T, K)``; the chain's states are pairs of consecutive signs.
 
-    The messages of a two-state chain are carried as log-odds, one number per chain, so
-    they neither overflow nor need rescaling however long the clip.
+    ``forward[t, a, b]`` and ``backward[t, a, b]`` are the log-messages of signs ``a`` at
+    ``t − 1`` and ``b`` at ``t`` (0: +, 1: −).
     """
     n_frames, n_chains = evidence.shape
+    if n_frames == 1:
+        posterior[0] = evidence[0]
+        return
     for k in range(n_chains):
-        message = 0.0
-        for t in range(n_frames - 1, -1, -1):
-            posterior[t, k] = message
-            message = _pass_on(evidence[t, k] + message, flip_cost[t, k])
-        message = 0.0
-        for t in range(n_frames):
-            message = evidence[t, k] + (_pass_on(message, flip_cost[t, k]) if t else 0.0)
-            posterior[t, k] += message
+        cost = _acceleration_costs(values[:, k], weight[k])
+        emission = np.empty((n_frames, 2))
+        emission[:, 0] = 0.5 * evidence[:, k]
+        emission[:, 1] = -0.5 * evidence[:, k]
+        forward = np.empty((n_frames, 2, 2))
+        backward = np.zeros((n_frames, 2, 2))
+        for a in range(2):
+            for b in range(2):
+                forward[1, a, b] = emission[0, a] + emission[1, b]
+        for t in range(2, n_frames):
+            for b in range(2):
+                for c in range(2):
+                    forward[t, b, c] = emission[t, c] + _log_add_exp(
+                        forward[t - 1, 0, b] - cost[t, 0, b, c],
+                        forward[t - 1, 1, b] - cost[t, 1, b, c])
+        for t in range(n_frames - 2, 0, -1):
+            for a in range(2):
+                for b in range(2):
+                    backward[t, a, b] = _log_add_exp(
+                        emission[t + 1, 0] - cost[t + 1, a, b, 0] + backward[t + 1, b, 0],
+                        emission[t + 1, 1] - cost[t + 1, a, b, 1] + backward[t + 1, b, 1])
+        for t in range(1, n_frames):
+            joint = forward[t] + backward[t]
+            posterior[t, k] = (_log_add_exp(joint[0, 0], joint[1, 0])
+                               - _log_add_exp(joint[0, 1], joint[1, 1]))
+        joint = forward[1] + backward[1]
+        posterior[0, k] = (_log_add_exp(joint[0, 0], joint[0, 1])
+                           - _log_add_exp(joint[1, 0], joint[1, 1]))
 
 
 def smooth_scale(bounds: np.ndarray, percentile: float = SCALE_PERCENTILE,

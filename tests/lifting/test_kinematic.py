@@ -6,7 +6,7 @@ from handdb.clip import Camera
 from handdb.errors import BoneLengthError
 from handdb.lifting import available_methods, bone_length_array, lift
 from handdb.skeletons import load_skeleton
-from handdb.synthetic.clips import synthesize_clip
+from handdb.synthetic.clips import synthesize_clip, thesis_clench_clip
 from handdb.synthetic.hand_model import make_hand
 from handdb.synthetic.kinematics import PALM_TO_CAMERA
 from tests.lifting.conftest import ORTHOGRAPHIC
@@ -59,8 +59,6 @@ def test_default_beats_the_thesis_on_rapid_gestures(rapid_clip):
     assert sign_accuracy(ours, clip.xyz, skeleton) > sign_accuracy(thesis, clip.xyz, skeleton)
 
 
-@pytest.mark.xfail(strict=True, reason="issue 4's rapid-gesture targets are not met yet "
-                   "(see benchmarks/RESULTS-lifting.md)")
 def test_rapid_gestures_meet_the_issue_targets(rapid_clip):
     clip, skeleton, lengths = rapid_clip
     result = lift(clip.uv, skeleton, lengths, ORTHOGRAPHIC, hand=clip.hand)
@@ -157,3 +155,13 @@ def test_unknown_method_and_bad_shapes_are_refused(rapid_clip):
     short[skeleton.index("index_tip")] = np.nan
     with pytest.raises(BoneLengthError, match="index_tip"):
         lift(clip.uv, skeleton, short, ORTHOGRAPHIC)
+
+
+def test_default_beats_the_thesis_on_its_own_clench_experiment():
+    # the thesis's Table 4.1 experiment: thesis21, its appendix's lengths, palm to camera
+    clip = thesis_clench_clip()
+    skeleton = load_skeleton(clip.skeleton)
+    lengths = bone_length_array(skeleton, clip.bone_lengths)
+    ours = lift(clip.uv, skeleton, lengths, ORTHOGRAPHIC, hand=clip.hand)
+    thesis = lift(clip.uv, skeleton, lengths, ORTHOGRAPHIC, method="thesis")
+    assert depth_error(ours, clip.xyz, skeleton) < depth_error(thesis, clip.xyz, skeleton)

@@ -3,48 +3,64 @@ import itertools
 import numpy as np
 import pytest
 
-from handdb.lifting.temporal import flip_costs, sign_posterior, smooth_scale
+from handdb.lifting.temporal import acceleration_spread, sign_posterior, smooth_scale
 
 
-def brute_force_posterior(log_odds, flip_cost):
-    """Every sign sequence of one chain with its unnormalised probability."""
+def brute_force_posterior(log_odds, values, spread):
+    """Log-odds of the positive sign per frame, by enumerating every sign sequence."""
     n = len(log_odds)
-    for seq in itertools.product((1, -1), repeat=n):
-        score = sum(0.5 * s * e for s, e in zip(seq, log_odds, strict=True))
-        score -= sum(flip_cost[t] for t in range(1, n) if seq[t] != seq[t - 1])
-        yield seq, np.exp(score)
+    plus, total = np.zeros(n), 0.0
+    for seq in itertools.product((1.0, -1.0), repeat=n):
+        signs = np.array(seq)
+        signed = signs[:, None] * values
+        score = 0.5 * np.sum(signs * log_odds)
+        score -= np.sum(np.diff(signed, 2, axis=0) ** 2) / (2.0 * spread**2)
+        weight = np.exp(score)
+        total += weight
+        plus += weight * (signs > 0)
+    return np.log(plus) - np.log(total - plus)
 
 
-@pytest.mark.parametrize("n_frames", [1, 2, 5, 8])
+@pytest.mark.parametrize("n_frames", [1, 2, 3, 5, 8])
 def test_sign_posterior_matches_enumeration(n_frames):
     rng = np.random.default_rng(n_frames)
     log_odds = rng.normal(scale=2.0, size=n_frames)
-    cost = np.abs(rng.normal(scale=2.0, size=n_frames))
-    cost[0] = 0.0
-    plus = np.zeros(n_frames)
-    total = 0.0
-    for seq, w in brute_force_posterior(log_odds, cost):
-        total += w
-        plus += w * (np.array(seq) > 0)
-    expected = np.log(plus) - np.log(total - plus)
-    got = sign_posterior(log_odds[:, None], cost[:, None])[:, 0]
-    np.testing.assert_allclose(got, expected, atol=1e-9)
+    values = rng.normal(size=(n_frames, 2))
+    spread = 1.3
+    got = sign_posterior(log_odds[:, None], values[:, None, :], np.array([spread]))[:, 0]
+    np.testing.assert_allclose(got, brute_force_posterior(log_odds, values, spread),
+                               atol=1e-9)
 
 
 def test_a_steep_bone_keeps_its_sign_through_uninformative_frames():
-    # evidence only at the ends; the bone never nears the image plane in between
+    # evidence only at the start; the bone never nears the image plane afterwards
     log_odds = np.zeros(50)
     log_odds[0] = 3.0
-    magnitude = np.full((50, 1), 20.0)
-    posterior = sign_posterior(log_odds[:, None], flip_costs(magnitude, np.array([1.0])))
+    depth = np.full((50, 1, 1), 20.0)
+    posterior = sign_posterior(log_odds[:, None], depth,
+                               acceleration_spread(depth, np.array([1.0])))
     assert np.all(posterior[:, 0] > 2.0)
 
 
-def test_a_bone_crossing_the_image_plane_may_flip():
-    log_odds = np.r_[np.full(20, 2.0), np.full(20, -2.0)]
-    magnitude = np.abs(np.linspace(-20, 20, 40))[:, None]     # passes through zero
-    posterior = sign_posterior(log_odds[:, None], flip_costs(magnitude, np.array([1.0])))
-    assert np.all(posterior[:15, 0] > 0) and np.all(posterior[25:, 0] < 0)
+def test_a_bone_moving_through_the_image_plane_keeps_going():
+    # |dZ| falls to zero and rises again at the same rate: the motion goes on through the
+    # image plane rather than bouncing back, so the sign flips at the crossing even though
+    # only the first frame says which sign the bone starts with
+    log_odds = np.zeros(41)
+    log_odds[0] = 3.0
+    depth = np.abs(np.linspace(20.0, -20.0, 41))[:, None, None]
+    posterior = sign_posterior(log_odds[:, None], depth,
+                               acceleration_spread(depth, np.array([1.0])))
+    assert np.all(posterior[:20, 0] > 0) and np.all(posterior[21:, 0] < 0)
+
+
+def test_a_bone_nearing_the_image_plane_turns_back():
+    log_odds = np.zeros(41)
+    log_odds[0] = 3.0
+    depth = (20.0 - 15.0 * np.sin(np.linspace(0.0, np.pi, 41)))[:, None, None]
+    posterior = sign_posterior(log_odds[:, None], depth,
+                               acceleration_spread(depth, np.array([1.0])))
+    assert np.all(posterior[:, 0] > 1.0)
 
 
 def test_smooth_scale_ignores_an_outlier_frame_and_fills_gaps():
@@ -57,6 +73,6 @@ def test_smooth_scale_ignores_an_outlier_frame_and_fills_gaps():
 
 def test_certain_frames_that_disagree_still_give_finite_posteriors():
     log_odds = np.array([[np.inf], [-np.inf], [np.inf]])
-    posterior = sign_posterior(log_odds, np.full((3, 1), 1e4))
+    posterior = sign_posterior(log_odds, np.full((3, 1, 1), 100.0), np.array([1.0]))
     # a flip costs far more than any frame's evidence: two certain frames outvote one
     assert np.all(np.isfinite(posterior)) and np.all(posterior > 0)
