@@ -48,25 +48,30 @@ def _member_bits(members: np.ndarray) -> np.ndarray:
     return members @ np.left_shift(1, np.arange(members.shape[1], dtype=np.int64))
 
 
-def _centred(points: np.ndarray, weights: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Return the weighted mean ``(N, 2)`` of ``(N, K, 2)`` points and the points about it.
+def _centred(
+    points: np.ndarray, taking_part: np.ndarray, count: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """Return the weighted means and the centred coordinates of ``(N, K, 2)`` points.
 
-    ``weights`` is ``(N, K) bool``; centred points are 0 where their weight is 0.
+    ``taking_part`` is ``(K, N) bool`` and ``count`` ``(N,)`` its column sums. Returns the
+    ``(2, N)`` means and ``(2, K, N)`` coordinate planes about them, 0 where a point does
+    not take part (points along the middle axis: numpy reduces a short last axis slowly).
+    A NaN coordinate of a point taking part counts as 0.
     """
-    taking_part = weights[..., None]
-    clean = np.where(taking_part, points, 0.0)
-    mean = clean.sum(axis=1) / np.maximum(weights.sum(axis=1), 1)[:, None]
-    return mean, np.where(taking_part, clean - mean[:, None], 0.0)
+    planes = points.transpose(2, 1, 0)
+    planes = np.where(taking_part & ~np.isnan(planes), planes, 0.0)
+    mean = planes.sum(axis=1) / np.maximum(count, 1)
+    return mean, np.where(taking_part, planes - mean[:, None], 0.0)
 
 
-def _well_spread(covariance: np.ndarray) -> np.ndarray:
+def _well_spread(xx: np.ndarray, xy: np.ndarray, yy: np.ndarray) -> np.ndarray:
     """``(N,) bool``: the smaller principal spread of covariances is wide enough.
 
-    ``covariance`` is ``(N, 2, 2)``; its smaller eigenvalue (closed form) must exceed
-    :data:`MIN_AFFINE_SPREAD` times the larger.
+    ``xx``, ``xy``, ``yy`` are the covariances' entries, ``(N,)`` each; the smaller
+    eigenvalue (closed form) must exceed :data:`MIN_AFFINE_SPREAD` times the larger.
     """
-    half_sum = 0.5 * (covariance[:, 0, 0] + covariance[:, 1, 1])
-    radius = np.hypot(0.5 * (covariance[:, 0, 0] - covariance[:, 1, 1]), covariance[:, 0, 1])
+    half_sum = 0.5 * (xx + yy)
+    radius = np.hypot(0.5 * (xx - yy), xy)
     return half_sum - radius > MIN_AFFINE_SPREAD * np.maximum(half_sum + radius, 1e-300)
 
 
@@ -96,30 +101,35 @@ def fit_maps(
         :data:`SIMILARITY` (2 points, or collinear ones), :data:`TRANSLATION` (1 point) or
         :data:`NO_MAP` (none).
     """
-    count = weights.sum(axis=1)
-    src_mean, src = _centred(source, weights)
-    dst_mean, dst = _centred(target, weights)
-    src_cov = np.swapaxes(src, 1, 2) @ src
-    cross = np.swapaxes(dst, 1, 2) @ src
+    taking_part = np.ascontiguousarray(weights.T)
+    count = taking_part.sum(axis=0)
+    (sx_mean, sy_mean), (sx, sy) = _centred(source, taking_part, count)
+    (dx_mean, dy_mean), (dx, dy) = _centred(target, taking_part, count)
+    sxx, sxy, syy = (sx * sx).sum(axis=0), (sx * sy).sum(axis=0), (sy * sy).sum(axis=0)
+    # cross_ij = sum of target coordinate i times source coordinate j.
+    cxx, cxy = (dx * sx).sum(axis=0), (dx * sy).sum(axis=0)
+    cyx, cyy = (dy * sx).sum(axis=0), (dy * sy).sum(axis=0)
 
     # The best rotation-and-scale, as the complex number sum(dst * conj(src)) / sum|src|^2.
-    spread = src_cov[:, 0, 0] + src_cov[:, 1, 1]
+    spread = sxx + syy
     turns = (count >= 2) & (spread > 0)
-    real = np.divide(cross[:, 0, 0] + cross[:, 1, 1], spread, out=np.ones_like(spread),
-                     where=turns)
-    imaginary = np.divide(cross[:, 1, 0] - cross[:, 0, 1], spread,
-                          out=np.zeros_like(spread), where=turns)
-    linear = np.stack([real, -imaginary, imaginary, real], axis=-1).reshape(-1, 2, 2)
+    real = np.divide(cxx + cyy, spread, out=np.ones_like(spread), where=turns)
+    imaginary = np.divide(cyx - cxy, spread, out=np.zeros_like(spread), where=turns)
+    linear = np.stack([real, -imaginary, imaginary, real])
 
     kind = np.minimum(count, SIMILARITY)
     if affine:
-        spread_ok = (count >= 3) & _well_spread(src_cov)
-        safe_cov = np.where(spread_ok[:, None, None], src_cov, np.eye(2))
-        linear = np.where(spread_ok[:, None, None], cross @ inverse_2x2(safe_cov), linear)
+        spread_ok = (count >= 3) & _well_spread(sxx, sxy, syy)
+        det = np.where(spread_ok, sxx * syy - sxy * sxy, 1.0)
+        general = np.stack([cxx * syy - cxy * sxy, cxy * sxx - cxx * sxy,
+                            cyx * syy - cyy * sxy, cyy * sxx - cyx * sxy]) / det
+        linear = np.where(spread_ok, general, linear)
         kind = np.where(spread_ok, AFFINE, kind)
 
-    offset = dst_mean - apply_linear(linear, src_mean)
-    return linear, np.where((count >= 1)[:, None], offset, np.nan), kind
+    offset = np.stack([dx_mean - linear[0] * sx_mean - linear[1] * sy_mean,
+                       dy_mean - linear[2] * sx_mean - linear[3] * sy_mean], axis=-1)
+    return (linear.T.reshape(-1, 2, 2), np.where((count >= 1)[:, None], offset, np.nan),
+            kind)
 
 
 def fit_maps_from_shape(
