@@ -43,7 +43,33 @@ def _inner_slope(
         return np.where(turns, 0.0, 1.0 / mean)
 
 
-def _pchip_in_gaps(uv: np.ndarray, missing: np.ndarray, gaps: Gaps) -> np.ndarray:
+def _outer_samples(
+    gaps: Gaps, before: np.ndarray, after: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """The joint's samples next to the ``before`` and ``after`` samples of each gap.
+
+    Gaps are ordered by joint, then start, so a sample missing next to ``before`` (or
+    ``after``) belongs to the previous (or next) gap of the joint, and the sample beyond
+    is the one bounding that gap.
+
+    Returns
+    -------
+    earlier, later
+        ``(G,) int64``: the last observed frame before ``before`` (-1 if none) and the first
+        after ``after`` (``T`` if none).
+    """
+    same_joint = gaps.joint[1:] == gaps.joint[:-1]
+    previous_touches = np.zeros(len(gaps), dtype=bool)
+    previous_touches[1:] = same_joint & (gaps.stop[:-1] == before[1:])
+    earlier = np.where(previous_touches, np.roll(gaps.start, 1) - 1, before - 1)
+    next_touches = np.zeros(len(gaps), dtype=bool)
+    next_touches[:-1] = same_joint & (gaps.start[1:] == after[:-1] + 1)
+    later = np.where(next_touches, np.roll(gaps.stop, -1), after + 1)
+    return (np.where(gaps.leading, -1, earlier),
+            np.where(gaps.trailing, gaps.n_frames, later))
+
+
+def _pchip_in_gaps(uv: np.ndarray, gaps: Gaps) -> np.ndarray:
     """Evaluate every joint's PCHIP through its observed samples in its gaps, all at once.
 
     PCHIP is local: in a gap it is the cubic Hermite between the samples bounding the gap,
@@ -55,10 +81,8 @@ def _pchip_in_gaps(uv: np.ndarray, missing: np.ndarray, gaps: Gaps) -> np.ndarra
     ----------
     uv
         ``(T, J, 2) float64``, NaN where missing.
-    missing
-        ``(T, J) bool``.
     gaps
-        Gaps of joints observed at least once.
+        Every gap of the joints observed at least once (as :func:`find_gaps` orders them).
 
     Returns
     -------
@@ -66,15 +90,10 @@ def _pchip_in_gaps(uv: np.ndarray, missing: np.ndarray, gaps: Gaps) -> np.ndarra
         ``(N, 2) float64``: the values at the points of ``gaps.frames()``, in order.
     """
     n_frames = uv.shape[0]
-    frames = np.arange(n_frames)[:, None]
-    last_seen = np.maximum.accumulate(np.where(missing, -1, frames), axis=0)
-    next_seen = np.minimum.accumulate(np.where(missing, n_frames, frames)[::-1], axis=0)[::-1]
     joint = gaps.joint
     before = np.where(gaps.leading, gaps.stop, gaps.start - 1)
     after = np.where(gaps.trailing, before, gaps.stop)
-    earlier = np.where(before > 0, last_seen[np.maximum(before - 1, 0), joint], -1)
-    later = np.where(after < n_frames - 1,
-                     next_seen[np.minimum(after + 1, n_frames - 1), joint], n_frames)
+    earlier, later = _outer_samples(gaps, before, after)
     has_earlier, has_later = (earlier >= 0)[:, None], (later < n_frames)[:, None]
     y_before, y_after = uv[before, joint], uv[after, joint]
     y_earlier = uv[np.maximum(earlier, 0), joint]
@@ -139,7 +158,7 @@ def interpolate_gaps(
     if kind == "pchip":
         seen_once = gaps.select(~gaps.whole_clip)
         _, frame, joint = seen_once.frames()
-        filled[frame, joint] = _pchip_in_gaps(uv, missing, seen_once)
+        filled[frame, joint] = _pchip_in_gaps(uv, seen_once)
     else:
         frames_all = np.arange(uv.shape[0])
         for j in np.unique(gaps.joint[~gaps.whole_clip]):
