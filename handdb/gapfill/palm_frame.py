@@ -87,7 +87,8 @@ def palm_motion(uv: np.ndarray, missing: np.ndarray, skeleton: Skeleton) -> Palm
     palm_seen = ~missing & palm
     if not (palm_seen.sum(axis=1) >= MIN_PALM_POINTS).any():
         return None
-    points, seen = uv[:, palm], palm_seen[:, palm]
+    palm_index = np.flatnonzero(palm)
+    points, seen = np.take(uv, palm_index, axis=1), np.take(palm_seen, palm_index, axis=1)
     complete = seen.all(axis=1)
     # The reference is shaped by the frames showing the whole palm (else by every frame
     # whose fit is affine): only those are fitted while shaping it.
@@ -99,7 +100,7 @@ def palm_motion(uv: np.ndarray, missing: np.ndarray, skeleton: Skeleton) -> Palm
         fitted = kind == AFFINE
         shaping = complete[shape_from] if complete.any() else fitted
         inverse = inverse_2x2(np.where(fitted[:, None, None], linear, np.eye(2)))
-        canonical = apply_linear(inverse, np.nan_to_num(shape_points) - offset[:, None])
+        canonical = apply_affine(inverse, -apply_linear(inverse, offset), shape_points)
         canonical = np.where((shape_seen & shaping[:, None])[..., None], canonical, np.nan)
         seen_once = ~np.isnan(canonical[..., 0]).all(axis=0)
         reference = np.where(seen_once[:, None], _median(

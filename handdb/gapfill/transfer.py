@@ -166,13 +166,17 @@ def fit_maps_from_shape(
     maps = np.concatenate([linear.reshape(-1, 4), offset], axis=1)
     maps = maps.reshape(point_sets.size, n_params, 6)
     constant, slope = maps[:, 0], maps[:, 1:] - maps[:, :1]
-    flat_target = np.where(weights[..., None], target, 0.0).reshape(n_targets, -1)
+    set_of = set_of.ravel()
+    order = np.argsort(set_of, kind="stable")
+    by_set = np.where(np.repeat(weights, 2, axis=1), target.reshape(n_targets, -1), 0.0)[order]
     fitted = np.empty((n_targets, 6))
-    order = np.argsort(set_of.ravel(), kind="stable")
-    for index, rows in enumerate(np.split(order, np.cumsum(np.bincount(set_of.ravel()))[:-1])):
-        fitted[rows] = flat_target[rows] @ slope[index] + constant[index]
-    return (fitted[:, :4].reshape(n_targets, 2, 2), fitted[:, 4:],
-            kind[::n_params][set_of.ravel()])
+    sizes = np.bincount(set_of)
+    stops = np.cumsum(sizes)
+    for index, (start, stop) in enumerate(zip(stops - sizes, stops, strict=True)):
+        fitted[start:stop] = by_set[start:stop] @ slope[index] + constant[index]
+    unsorted = np.empty_like(fitted)
+    unsorted[order] = fitted
+    return unsorted[:, :4].reshape(n_targets, 2, 2), unsorted[:, 4:], kind[::n_params][set_of]
 
 
 def map_points(
