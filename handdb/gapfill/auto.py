@@ -36,7 +36,7 @@ from handdb.gapfill.palm_frame import palm_motion, to_image, to_palm_frame
 from handdb.gapfill.refine import refine_bone_lengths
 from handdb.gapfill.registry import OFFLINE, MethodOutput, register
 from handdb.gapfill.regression import regression_estimates, regression_samples
-from handdb.gapfill.rigid import carry_along_chains, palm_joints, place_from_rest_pose
+from handdb.gapfill.rigid import carry_along_chains_many, palm_joints, place_from_rest_pose
 from handdb.skeletons import Skeleton
 
 #: Longest interior gap (frames) bridged by interpolation rather than by the other joints.
@@ -88,8 +88,8 @@ def estimate_long_gaps(
         ``gaps.frames()``, in order.
     """
     points = [gaps.frames()[1:] for _, gaps in problems]
-    chains = [carry_along_chains(filled, missing, gaps, skeleton)[frame, joint]
-              for (missing, gaps), (frame, joint) in zip(problems, points, strict=True)]
+    chains = [carried[frame, joint] for carried, (frame, joint) in zip(
+        carry_along_chains_many(filled, problems, skeleton), points, strict=True)]
     results: list[dict[str, np.ndarray]] = [{"chain": chain} for chain in chains]
     if "regression" in estimates:
         fingers = ~palm_joints(skeleton)

@@ -101,7 +101,7 @@ def regression_samples(uv: np.ndarray, missing: np.ndarray, columns: np.ndarray)
     coordinates = np.where(seen, np.take(uv, columns, axis=1).reshape(n_frames, -1), 0.0)
     centre = coordinates.sum(axis=0) / np.maximum(seen.sum(axis=0), 1)
     values = np.zeros((n_frames + 1, coordinates.shape[1] + 1))
-    values[:-1, :-1] = np.where(seen, coordinates - centre, 0.0)
+    np.subtract(coordinates, centre, out=values[:-1, :-1], where=seen)
     values[:-1, -1] = 1.0
     return Samples(columns, centre, values)
 

@@ -11,6 +11,7 @@ joint never observed is placed by fitting the rest pose to the observed joints o
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from functools import cache
 
 import numpy as np
@@ -57,34 +58,54 @@ def _carriers_of(basis: np.ndarray, joint: np.ndarray) -> tuple[np.ndarray, np.n
     return carriers[joint], np.take_along_axis(rows, carriers, axis=1)[joint]
 
 
-def _carry(
-    uv: np.ndarray, missing: np.ndarray, reference: np.ndarray, frame: np.ndarray,
-    joint: np.ndarray, basis: np.ndarray, affine: bool,
-) -> np.ndarray:
-    carriers, valid = _carriers_of(basis, joint)
-    before, now = reference[:, None], frame[:, None]
-    weights = valid & ~missing[before, carriers] & ~missing[now, carriers]
-    query = uv[reference, joint]
-    mapped, ok = map_points(uv[before, carriers], uv[now, carriers], weights, query,
-                            affine=affine)
-    return np.where(ok[:, None], mapped, query)
-
-
 def _carried(
-    uv: np.ndarray, missing: np.ndarray, gaps: Gaps, basis: np.ndarray, affine: bool
-) -> np.ndarray:
-    """The points of ``gaps`` carried from both edges, blended: ``(N, 2)``, in order."""
-    basis = np.broadcast_to(basis, (uv.shape[1], uv.shape[1]))
-    gap, frame, joint = gaps.frames()
-    before = np.maximum(gaps.start[gap] - 1, 0)
-    after = np.minimum(gaps.stop[gap], gaps.n_frames - 1)
-    from_before, from_after = np.split(
-        _carry(uv, missing, np.concatenate([before, after]), np.tile(frame, 2),
-               np.tile(joint, 2), basis, affine), 2)
-    share_after = ((frame - before) / np.maximum(after - before, 1))[:, None]
-    blended = (1 - share_after) * from_before + share_after * from_after
-    blended = np.where(gaps.leading[gap][:, None], from_after, blended)
-    return np.where(gaps.trailing[gap][:, None], from_before, blended)
+    problems: Sequence[tuple[np.ndarray, np.ndarray, Gaps]], basis: np.ndarray, affine: bool
+) -> list[np.ndarray]:
+    """Carry the points of gaps from both edges of each gap, and blend.
+
+    Parameters
+    ----------
+    problems
+        ``(uv, missing, gaps)`` triples: tracks ``(T, J, 2)``, the points not to carry
+        with ``(T, J) bool``, and the gaps whose points to carry. Every problem's maps are
+        fitted in one batch.
+    basis
+        ``(J,) bool`` or ``(J, J) bool``: as for :func:`carry_across_gaps`.
+    affine
+        Fit affine maps (else similarities).
+
+    Returns
+    -------
+    list of numpy.ndarray
+        Per problem, ``(N, 2) float64``: the points of ``gaps.frames()``, in order.
+    """
+    n_joints = problems[0][0].shape[1]
+    basis = np.broadcast_to(basis, (n_joints, n_joints))
+    points = [gaps.frames() for _, _, gaps in problems]
+    edges = [(np.maximum(gaps.start[gap] - 1, 0), np.minimum(gaps.stop[gap], gaps.n_frames - 1))
+             for (_, _, gaps), (gap, _, _) in zip(problems, points, strict=True)]
+    sizes = [2 * gap.size for gap, _, _ in points]
+    carriers, valid = (np.split(part, np.cumsum(sizes)[:-1]) for part in _carriers_of(
+        basis, np.concatenate([np.tile(joint, 2) for _, _, joint in points])))
+    fits = []
+    for (uv, missing, _), (_, frame, joint), (before, after), by, ok in zip(
+            problems, points, edges, carriers, valid, strict=True):
+        reference, now = np.concatenate([before, after]), np.tile(frame, 2)
+        weights = ok & ~missing[reference[:, None], by] & ~missing[now[:, None], by]
+        fits.append((uv[reference[:, None], by], uv[now[:, None], by], weights,
+                     uv[reference, np.tile(joint, 2)]))
+    source, target, weights, query = (np.concatenate(part) for part in zip(*fits, strict=True))
+    mapped, ok = map_points(source, target, weights, query, affine=affine)
+    carried = np.split(np.where(ok[:, None], mapped, query), np.cumsum(sizes)[:-1])
+    blended = []
+    for (_, _, gaps), (gap, frame, _), (before, after), both in zip(
+            problems, points, edges, carried, strict=True):
+        from_before, from_after = np.split(both, 2)
+        share_after = ((frame - before) / np.maximum(after - before, 1))[:, None]
+        blend = (1 - share_after) * from_before + share_after * from_after
+        blend = np.where(gaps.leading[gap][:, None], from_after, blend)
+        blended.append(np.where(gaps.trailing[gap][:, None], from_before, blend))
+    return blended
 
 
 def carry_across_gaps(
@@ -113,7 +134,7 @@ def carry_across_gaps(
     """
     _, frame, joint = gaps.frames()
     filled = uv.copy()
-    filled[frame, joint] = _carried(uv, missing, gaps, basis, affine)
+    filled[frame, joint] = _carried([(uv, missing, gaps)], basis, affine)[0]
     return filled
 
 
@@ -219,15 +240,37 @@ def carry_along_chains(
     numpy.ndarray
         ``(T, J, 2) float64``: ``uv`` with ``gaps`` filled.
     """
-    unresolved = np.zeros_like(missing)
-    _, frame, joint_of_point = gaps.frames()
-    unresolved[frame, joint_of_point] = True
+    return carry_along_chains_many(uv, [(missing, gaps)], skeleton)[0]
+
+
+def carry_along_chains_many(
+    uv: np.ndarray, problems: Sequence[tuple[np.ndarray, Gaps]], skeleton: Skeleton
+) -> list[np.ndarray]:
+    """:func:`carry_along_chains` for several ``(missing, gaps)`` problems on one clip.
+
+    Each problem fills its own copy of ``uv``; the fits of each depth are batched across
+    the problems.
+
+    Returns
+    -------
+    list of numpy.ndarray
+        Per problem, ``(T, J, 2) float64``: ``uv`` with its gaps filled.
+    """
     carriers = parent_bones(skeleton)
     depth = skeleton.depth()
-    filled = uv.copy()
-    for level in np.unique(depth[gaps.joint]):
-        at_level = gaps.select(depth[gaps.joint] == level)
-        _, frame, joint = at_level.frames()
-        filled[frame, joint] = _carried(filled, unresolved, at_level, carriers, affine=False)
-        unresolved[frame, joint] = False
+    filled = [uv.copy() for _ in problems]
+    unresolved = []
+    for missing, gaps in problems:
+        _, frame, joint = gaps.frames()
+        unresolved.append(np.zeros_like(missing))
+        unresolved[-1][frame, joint] = True
+    for level in np.unique(np.concatenate([depth[gaps.joint] for _, gaps in problems])):
+        at_level = [gaps.select(depth[gaps.joint] == level) for _, gaps in problems]
+        carried = _carried(list(zip(filled, unresolved, at_level, strict=True)), carriers,
+                           affine=False)
+        for state, still, gaps, points in zip(filled, unresolved, at_level, carried,
+                                              strict=True):
+            _, frame, joint = gaps.frames()
+            state[frame, joint] = points
+            still[frame, joint] = False
     return filled
