@@ -16,7 +16,6 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from handdb.lifting.geometry import bone_vectors_2d
 from handdb.lifting.hand_layout import HandLayout
 from handdb.lifting.pinhole import ray_roots
 from handdb.skeletons import Skeleton
@@ -71,14 +70,13 @@ def orthographic_candidates(xy: np.ndarray, abs_dz: np.ndarray, palm_z: np.ndarr
         The clip's skeleton, its palm and fingers.
     """
     anchors = anchor_joints(layout)
-    z = palm_z[:, :, anchors]
-    points = np.stack([np.broadcast_to(xy[:, None, anchors, 0], z.shape),
-                       np.broadcast_to(xy[:, None, anchors, 1], z.shape), z], axis=-1)
-    planar = bone_vectors_2d(xy, skeleton)[:, None, layout.chains]      # (T, 1, F, 3, 2)
-    signs = np.array([1.0, -1.0])
-    depth = abs_dz[:, None, layout.chains, None] * signs                 # (T, 1, F, 3, 2)
-    vectors = np.concatenate([np.broadcast_to(planar[..., None, :], depth.shape + (2,)),
-                              depth[..., None]], axis=-1)                # (T, 1, F, 3, 2, 3)
+    points = np.empty(palm_z.shape[:2] + (len(anchors), 3))
+    points[..., :2] = xy[:, None, anchors]
+    points[..., 2] = palm_z[:, :, anchors]
+    chains = layout.chains
+    vectors = np.empty((len(xy), 1) + chains.shape + (2, 3))             # (T, 1, F, 3, 2, 3)
+    vectors[..., :2] = (xy[:, chains] - xy[:, skeleton.parents[chains]])[:, None, :, :, None]
+    vectors[..., 2] = abs_dz[:, None, chains, None] * np.array([1.0, -1.0])
     bones = (vectors[:, :, :, 0][..., :, None, None, :],
              vectors[:, :, :, 1][..., None, :, None, :],
              vectors[:, :, :, 2][..., None, None, :, :])

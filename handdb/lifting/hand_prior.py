@@ -23,6 +23,7 @@ import numpy as np
 
 from handdb.lifting.finger_geometry import FingerCandidates
 from handdb.lifting.hand_layout import CHAIN_BONES, HandLayout
+from handdb.lifting.temporal import NEGLIGIBLE_NATS
 
 #: Every sign pattern of a finger's three bones, ``(8, 3)``; row ``k`` has bit ``b`` of
 #: ``k`` (most significant first) set where bone ``b`` is negative.
@@ -63,8 +64,6 @@ COMFORT_SIGMA_DEG = 45.0
 
 HANDEDNESS = {"right": 1.0, "left": -1.0}
 
-#: States this many nats below a finger's best count as weight 0 (e^-40 < 1e-17).
-NEGLIGIBLE_LOG_WEIGHT = -40.0
 
 
 @dataclass(frozen=True)
@@ -281,7 +280,7 @@ def _summarise(log_likelihood, evidence, bone_log_odds, best, t, p, f):
     total = first = second = third = 0.0
     for state in range(8):
         gap = log_likelihood[state] - peak
-        weight = math.exp(gap) if gap > NEGLIGIBLE_LOG_WEIGHT else 0.0
+        weight = math.exp(gap) if gap > -NEGLIGIBLE_NATS else 0.0
         total += weight
         first += weight if state < 4 else 0.0
         second += weight if state % 4 < 2 else 0.0

@@ -59,7 +59,7 @@ from handdb.lifting.geometry import (
     orthographic_points,
     projected_lengths,
 )
-from handdb.lifting.hand_layout import hand_layout
+from handdb.lifting.hand_layout import HandLayout, hand_layout
 from handdb.lifting.hand_prior import SIGN_STATES, score_fingers
 from handdb.lifting.palm import palm_signs
 from handdb.lifting.pinhole import camera_rays, estimate_root_depth, walk_rays
@@ -68,7 +68,6 @@ from handdb.lifting.result import LiftResult
 from handdb.lifting.temporal import acceleration_spread, sigmoid, sign_posterior, smooth_scale
 from handdb.skeletons import Skeleton
 
-#: Rounds of root depth and sign estimation for a pinhole clip (each round's signs give
 #: the next round's root depth).
 PINHOLE_PASSES = 2
 
@@ -160,18 +159,19 @@ def resolve_signs(
     scores = score_fingers(candidates, bone_lengths, layout, hand)
     votes = np.clip(scores.evidence[:, 0] - scores.evidence[:, 1], -FINGER_VOTE_CAP,
                     FINGER_VOTE_CAP)                                      # (T, F)
-    palm_depths = palm_z[:, None, layout.palm_bones]                      # (T, 1, P)
+    palm_depths = _palm_depths(candidates, palm_z, skeleton, layout)     # (T, 1, 2, P)
     floor = TEMPORAL_FLOOR * np.nanmean(bone_lengths[layout.palm_bones], keepdims=True)
     palm_odds = sign_posterior(votes.sum(axis=1, keepdims=True), palm_depths,
-                               acceleration_spread(palm_depths, floor))[:, 0]
+                               acceleration_spread(palm_depths[:, :, 0], floor))[:, 0]
     state = (palm_odds < 0).astype(np.int64)
     frames = np.arange(n_frames)[:, None]
     chosen = scores.bone_log_odds[frames[:, 0], state]                   # (T, F, 3)
 
-    chain_dz = abs_dz[:, layout.chains].reshape(n_frames, -1, 1)         # (T, F * 3, 1)
+    chain_dz = _chain_depths(candidates, state, scores.best[frames[:, 0], state])
     floor = TEMPORAL_FLOOR * bone_lengths[layout.chains].ravel()
     finger_odds = sign_posterior(chosen.reshape(n_frames, -1), chain_dz,
-                                 acceleration_spread(chain_dz, floor)).reshape(chosen.shape)
+                                 acceleration_spread(chain_dz[:, :, 0], floor)
+                                 ).reshape(chosen.shape)
     finger_signs = np.where(finger_odds < 0, -1.0, 1.0)
 
     # The mirror flips the palm tilt and every finger state at once. Compare each frame's
@@ -195,6 +195,41 @@ def resolve_signs(
     return SignSolution(signs=signs, confidence=np.clip(confidence, 0.5, 1.0),
                         mirror_log_odds=mirror_log_odds, palm_state=state,
                         finger_signs=finger_signs, candidates=candidates)
+
+
+def _palm_depths(candidates: FingerCandidates, palm_z: np.ndarray, skeleton: Skeleton,
+                 layout: HandLayout) -> np.ndarray:
+    """Depth of the palm's joints relative to the root in each palm state, ``(T, 1, 2, P)``.
+
+    Orthographically state 1 is the mirror of state 0 (``palm_z``); through a pinhole the
+    candidates' palms are used as they are.
+    """
+    if candidates.palm is None:
+        z = palm_z[:, layout.palm_bones]
+        return np.stack([z, -z], axis=1)[:, None]
+    z = candidates.palm[..., 2]                                          # (T, 2, J)
+    return (z[:, :, layout.palm_bones] - z[:, :, skeleton.root, None])[:, None]
+
+
+def _chain_depths(candidates: FingerCandidates, state: np.ndarray,
+                  best: np.ndarray) -> np.ndarray:
+    """Depth each finger bone spans under either sign, ``(T, F * 3, 2, 1)``.
+
+    Bones above it take their signs from the frame's most likely state ``best`` ``(T, F)``
+    under the chosen palm state ``state`` ``(T,)``; orthographically those do not matter.
+    """
+    n_frames, n_fingers = best.shape
+    full = (n_frames, 2, n_fingers, 2, 2, 2)
+    frames, fingers = np.arange(n_frames)[:, None, None], np.arange(n_fingers)[None, :, None]
+    own = np.array([0, 1])[None, None, :]
+    first, second = (best[..., None] >> 2) & 1, (best[..., None] >> 1) & 1
+    at = (frames, state[:, None, None], fingers)
+    depths = np.stack([
+        np.broadcast_to(candidates.bones[0][..., 2], full)[(*at, own, 0, 0)],
+        np.broadcast_to(candidates.bones[1][..., 2], full)[(*at, first, own, 0)],
+        np.broadcast_to(candidates.bones[2][..., 2], full)[(*at, first, second, own)],
+    ], axis=2)                                                           # (T, F, 3, 2)
+    return depths.reshape(n_frames, -1, 2, 1)
 
 
 def _chosen_points(solution: SignSolution, skeleton: Skeleton) -> np.ndarray:
@@ -235,26 +270,20 @@ def _lift_pinhole(uv: np.ndarray, skeleton: Skeleton, bone_lengths: np.ndarray,
     rays = camera_rays(uv, camera)
     root = skeleton.root
     parent, child = skeleton.bones.T
-    bone_dz = weak_dz
-    for _ in range(PINHOLE_PASSES):
-        depth = estimate_root_depth(uv, skeleton, bone_lengths, camera, bone_dz, weak_scale)
-        metric_xy = (rays[..., :2] - rays[:, root : root + 1, :2]) * depth[:, None, None]
-        abs_dz, _ = depth_magnitudes(projected_lengths(metric_xy, skeleton), bone_lengths,
-                                     np.ones(len(uv)))
+    depth = estimate_root_depth(uv, skeleton, bone_lengths, camera, weak_dz, weak_scale)
+    metric_xy = (rays[..., :2] - rays[:, root : root + 1, :2]) * depth[:, None, None]
+    abs_dz, _ = depth_magnitudes(projected_lengths(metric_xy, skeleton), bone_lengths,
+                                 np.ones(len(uv)))
 
-        def candidates_for(palm: np.ndarray, depth=depth, abs_dz=abs_dz) -> FingerCandidates:
-            palm_dz = np.full(abs_dz.shape, np.nan)
-            palm_dz[:, layout.palm_bones] = palm * abs_dz[:, layout.palm_bones]
-            states = [walk_rays(rays, depth, skeleton, bone_lengths, sign * palm_dz)[0]
-                      for sign in (1.0, -1.0)]
-            return perspective_candidates(rays, np.stack(states, axis=1), bone_lengths,
-                                          layout)
+    def candidates_for(palm: np.ndarray) -> FingerCandidates:
+        palm_dz = np.full(abs_dz.shape, np.nan)
+        palm_dz[:, layout.palm_bones] = palm * abs_dz[:, layout.palm_bones]
+        states = [walk_rays(rays, depth, skeleton, bone_lengths, sign * palm_dz)[0]
+                  for sign in (1.0, -1.0)]
+        return perspective_candidates(rays, np.stack(states, axis=1), bone_lengths, layout)
 
-        solution = resolve_signs(metric_xy, abs_dz, bone_lengths, skeleton, hand,
-                                 candidates_for)
-        xyz = _chosen_points(solution, skeleton)
-        bone_dz = np.full(abs_dz.shape, np.nan)
-        bone_dz[:, child] = xyz[:, child, 2] - xyz[:, parent, 2]
+    solution = resolve_signs(metric_xy, abs_dz, bone_lengths, skeleton, hand, candidates_for)
+    xyz = _chosen_points(solution, skeleton)
     inconsistency = np.zeros(abs_dz.shape)
     inconsistency[:, child] = np.clip(
         np.linalg.norm(xyz[:, child] - xyz[:, parent], axis=-1) - bone_lengths[child], 0.0,

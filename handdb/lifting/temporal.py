@@ -28,6 +28,9 @@ SCALE_PERCENTILE = 75.0
 #: Standard deviation of the Gaussian smoothing the scale, frames.
 SCALE_SMOOTHING_FRAMES = 3.0
 
+#: A term this many nats below another adds nothing to their log-sum (e^-40 < 1e-17).
+NEGLIGIBLE_NATS = 40.0
+
 #: Posterior log-odds are clipped to this magnitude (a probability of 1 − 1e-13).
 MAX_LOG_ODDS = 30.0
 
@@ -38,7 +41,7 @@ def acceleration_spread(values: np.ndarray, floor: np.ndarray) -> np.ndarray:
     Parameters
     ----------
     values
-        ``(T, K, D) float64``: each chain's value under its positive sign; NaN: no value.
+        ``(T, K, D) float64``: each chain's value under one sign throughout; NaN: none.
     floor
         ``(K,) float64``: smallest spread, same units, added in quadrature.
 
@@ -62,8 +65,9 @@ def sign_posterior(log_odds: np.ndarray, values: np.ndarray, spread: np.ndarray)
     log_odds
         ``(T, K) float64``: each frame's own evidence for the positive sign.
     values
-        ``(T, K, D) float64``: each chain's value under its positive sign (the negative
-        sign negates it); NaN: no value.
+        ``(T, K, 2, D) float64``: each chain's value under its positive and its negative
+        sign (orthographically one is minus the other; through a pinhole the near and far
+        solutions differ); NaN: no value.
     spread
         ``(K,) float64``: standard deviation of each component's second frame-to-frame
         difference (:func:`acceleration_spread`).
@@ -83,23 +87,29 @@ def sign_posterior(log_odds: np.ndarray, values: np.ndarray, spread: np.ndarray)
 
 @numba.njit(cache=True, nogil=True, error_model="numpy")
 def _log_add_exp(a: float, b: float) -> float:
-    high = max(a, b)
-    return high + math.log1p(math.exp(min(a, b) - high))
+    """``log(e^a + e^b)``; the larger alone when the other adds less than ``e^-NEGLIGIBLE``."""
+    high, low = max(a, b), min(a, b)
+    if low - high < -NEGLIGIBLE_NATS:
+        return high
+    return high + math.log1p(math.exp(low - high))
 
 
 @numba.njit(cache=True, nogil=True, error_model="numpy")
 def _acceleration_costs(values, weight):
-    """``cost[t, a, b, c]``, nats, of signs ``a, b, c`` (0: +, 1: −) at ``t − 2, t − 1, t``."""
-    n_frames, n_components = values.shape
+    """``cost[t, a, b, c]``, nats, of signs ``a, b, c`` (0: +, 1: −) at ``t − 2, t − 1, t``.
+
+    ``values`` is ``(T, 2, D)``: the chain's value under each sign.
+    """
+    n_frames, _, n_components = values.shape
     cost = np.zeros((n_frames, 2, 2, 2))
     for t in range(2, n_frames):
         for a in range(2):
             for b in range(2):
                 for c in range(2):
-                    sa, sb, sc = 1.0 - 2.0 * a, 1.0 - 2.0 * b, 1.0 - 2.0 * c
                     total = 0.0
                     for d in range(n_components):
-                        x = sc * values[t, d] - 2.0 * sb * values[t - 1, d] + sa * values[t - 2, d]
+                        x = (values[t, c, d] - 2.0 * values[t - 1, b, d]
+                             + values[t - 2, a, d])
                         total += x * x
                     cost[t, a, b, c] = weight * total
     return cost
@@ -148,7 +158,8 @@ def _forward_backward(evidence, values, weight, posterior):
 
 
 def smooth_scale(bounds: np.ndarray, percentile: float = SCALE_PERCENTILE,
-                 half_window: int = SCALE_HALF_WINDOW) -> np.ndarray:
+                 half_window: int = SCALE_HALF_WINDOW,
+                 smoothing: float = SCALE_SMOOTHING_FRAMES) -> np.ndarray:
     """Estimate a scale per frame from per-frame lower bounds, robust and smooth.
 
     Parameters
@@ -160,6 +171,8 @@ def smooth_scale(bounds: np.ndarray, percentile: float = SCALE_PERCENTILE,
         Percentile of the bounds in the window taken as the scale.
     half_window
         Frames on each side of a frame that inform its scale.
+    smoothing
+        Standard deviation of the Gaussian smoothing that follows, frames.
 
     Returns
     -------
@@ -174,7 +187,7 @@ def smooth_scale(bounds: np.ndarray, percentile: float = SCALE_PERCENTILE,
     index = np.arange(len(bounds))
     filled = np.interp(index, index[finite], bounds[finite])
     upper = percentile_filter(filled, percentile, size=2 * half_window + 1, mode="nearest")
-    return gaussian_filter1d(upper, SCALE_SMOOTHING_FRAMES, mode="nearest")
+    return gaussian_filter1d(upper, smoothing, mode="nearest")
 
 
 def sigmoid(x: np.ndarray | float) -> np.ndarray:
