@@ -134,7 +134,7 @@ def _block_moments(values: np.ndarray, complete: np.ndarray) -> np.ndarray:
 class _Training:
     """The frames each gap's regression trains on.
 
-    The frames every problem sees in full (``complete``) that fill whole blocks of the
+    The frames where the gap's problem misses no column that fill whole blocks of the
     window are summed from :func:`_block_moments`; the others are listed in ``rows``.
 
     Attributes
@@ -173,7 +173,8 @@ def _training_frames(
     needed
         ``(G, C) bool``: the columns that must be observed in a training frame.
     complete
-        ``(T,) bool``: frames where no problem misses a column (summed by blocks).
+        ``(P, T) bool``: for each problem, the frames where no column is missing (summed
+        by blocks).
     """
     n_frames = gaps.n_frames
     low = np.maximum(gaps.start - WINDOW, 0)
@@ -185,7 +186,7 @@ def _training_frames(
                        & _bit_sets(needed)[:, None]) == 0)
     blocks = np.stack([-(-low // BLOCK), high // BLOCK], axis=1)
     blocks[:, 1] = np.maximum(blocks[:, 1], blocks[:, 0])
-    summed = (complete[window] & (window >= BLOCK * blocks[:, :1])
+    summed = (complete[problem[:, None], window] & (window >= BLOCK * blocks[:, :1])
               & (window < BLOCK * blocks[:, 1:]))
     listed = train & ~summed
     n_rows = listed.sum(axis=1)
@@ -232,11 +233,15 @@ def _predict_gaps(
     gram = scatter / spread[:, :, None] / spread[:, None, :]
     gram += (RIDGE * n)[..., None] * np.eye(use.shape[1])
     cross = np.take_along_axis(scatter, coordinates[:, None, :], axis=2) / spread[..., None]
-    weights = np.linalg.solve(gram, cross)
+    standard_weights = np.linalg.solve(gram, cross)
+    # On the rows of samples.values (the centred coordinates, then 1): the standardised
+    # predictors' weights, and the constant that restores the target's mean.
+    weights = np.empty((len(gaps), use.shape[1] + 1, 2))
+    weights[:, :-1] = standard_weights / spread[..., None]
+    weights[:, -1] = (np.take_along_axis(mean, coordinates, axis=1) + samples.centre[coordinates]
+                      - (mean[:, None] @ weights[:, :-1])[:, 0])
     around = np.clip(gaps.start[:, None] - 1 + np.arange(span), 0, gaps.n_frames - 1)
-    standard = (samples.values[around, :-1] - mean[:, None]) / spread[:, None]
-    offset = np.take_along_axis(mean, coordinates, axis=1) + samples.centre[coordinates]
-    return standard @ weights + offset[:, None]
+    return samples.values[around] @ weights
 
 
 def _blend_to_edges(
@@ -308,16 +313,17 @@ def regression_estimates(
         missing_bits[index] = _bit_sets(missing_columns)
         low[index], high[index] = samples.observed_range(~missing_columns)
     own = np.arange(columns.size) == np.searchsorted(columns, gaps.joint)[:, None]
-    complete = np.bitwise_or.reduce(missing_bits, axis=0) == 0
+    complete = missing_bits == 0
     training = _training_frames(missing_bits, problem, gaps, usable | own, complete)
-    running = _block_moments(samples.values, complete)
+    running = np.stack([_block_moments(samples.values, frames) for frames in complete])
     span = int(np.max(gaps.length, initial=0)) + 2
     predicted = np.empty((len(gaps), span, 2))
     by_size = np.argsort(training.n_rows, kind="stable")
     for batch in np.array_split(by_size, -(-len(gaps) // BATCH_GAPS)):
         x = samples.values[training.rows[batch, :max(int(training.n_rows[batch].max()), 1)]]
         first, last = training.blocks[batch].T
-        moments = np.swapaxes(x, 1, 2) @ x + running[last] - running[first]
+        moments = (np.swapaxes(x, 1, 2) @ x + running[problem[batch], last]
+                   - running[problem[batch], first])
         predicted[batch] = _predict_gaps(samples, moments, gaps.select(batch), usable[batch],
                                          span)
     ok = usable.any(axis=1) & (training.n_train >= MIN_TRAINING_FRAMES)
