@@ -53,11 +53,25 @@ class Samples:
         ``(T + 1, 2 C + 1) float64``: the coordinates minus ``centre``, 0 where missing,
         then a column of ones (so one matrix product gives counts, sums and scatter); the
         last row, all zeros, stands for "no sample".
+    seen
+        ``(T, C) bool``: the points observed.
+    complete
+        ``(T,) bool``: the frames where every column is observed.
+    running
+        ``(T // BLOCK + 1, 2 C + 1, 2 C + 1) float64``: running sums of the moments of the
+        complete frames, by blocks (:func:`_block_moments`).
+    low, high
+        ``(2 C,) float64``: the lowest and highest observed value of each coordinate.
     """
 
     columns: np.ndarray
     centre: np.ndarray
     values: np.ndarray
+    seen: np.ndarray
+    complete: np.ndarray
+    running: np.ndarray
+    low: np.ndarray
+    high: np.ndarray
 
     def coordinates(self, frame: np.ndarray, column: np.ndarray) -> np.ndarray:
         """``(N, 2) float64``, pixels: the observed points of ``column`` at ``frame``."""
@@ -65,12 +79,23 @@ class Samples:
         return self.values[frame[:, None], pair] + self.centre[pair]
 
     def observed_range(self, seen: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """``(2 C,)`` lowest and highest value of each coordinate where ``seen`` ``(T, C)``."""
-        seen = np.repeat(seen, 2, axis=1)
-        centred = self.values[:-1, :-1]
-        low = np.min(centred, axis=0, where=seen, initial=np.inf)
-        high = np.max(centred, axis=0, where=seen, initial=-np.inf)
-        return low + self.centre, high + self.centre
+        """``(2 C,)`` lowest and highest value of each coordinate where ``seen`` ``(T, C)``.
+
+        ``seen`` is a subset of :attr:`seen`; only the columns where a point it leaves out
+        holds an extreme are searched again.
+        """
+        frame, column = np.nonzero(self.seen & ~seen)
+        pair = 2 * column[:, None] + np.arange(2)
+        left_out = self.values[frame[:, None], pair] + self.centre[pair]
+        extreme = (left_out == self.low[pair]) | (left_out == self.high[pair])
+        low, high = self.low.copy(), self.high.copy()
+        for again in np.unique(pair[extreme]):
+            rows = seen[:, again // 2]
+            low[again] = np.min(self.values[:-1, again], where=rows, initial=np.inf)
+            high[again] = np.max(self.values[:-1, again], where=rows, initial=-np.inf)
+            low[again] += self.centre[again]
+            high[again] += self.centre[again]
+        return low, high
 
 
 def _bit_sets(members: np.ndarray) -> np.ndarray:
@@ -97,13 +122,19 @@ def regression_samples(uv: np.ndarray, missing: np.ndarray, columns: np.ndarray)
         hides more points only reads samples where they are seen.
     """
     n_frames = uv.shape[0]
-    seen = np.repeat(~missing[:, columns], 2, axis=1)
-    coordinates = np.where(seen, np.take(uv, columns, axis=1).reshape(n_frames, -1), 0.0)
-    centre = coordinates.sum(axis=0) / np.maximum(seen.sum(axis=0), 1)
+    seen = ~missing[:, columns]
+    seen_coordinates = np.repeat(seen, 2, axis=1)
+    coordinates = np.where(seen_coordinates,
+                           np.take(uv, columns, axis=1).reshape(n_frames, -1), 0.0)
+    centre = coordinates.sum(axis=0) / np.maximum(seen_coordinates.sum(axis=0), 1)
     values = np.zeros((n_frames + 1, coordinates.shape[1] + 1))
-    np.subtract(coordinates, centre, out=values[:-1, :-1], where=seen)
+    np.subtract(coordinates, centre, out=values[:-1, :-1], where=seen_coordinates)
     values[:-1, -1] = 1.0
-    return Samples(columns, centre, values)
+    low = np.min(values[:-1, :-1], axis=0, where=seen_coordinates, initial=np.inf) + centre
+    high = np.max(values[:-1, :-1], axis=0, where=seen_coordinates, initial=-np.inf) + centre
+    complete = seen.all(axis=1)
+    return Samples(columns, centre, values, seen, complete,
+                   _block_moments(values, complete), low, high)
 
 
 def _block_moments(values: np.ndarray, complete: np.ndarray) -> np.ndarray:
@@ -134,23 +165,28 @@ def _block_moments(values: np.ndarray, complete: np.ndarray) -> np.ndarray:
 class _Training:
     """The frames each gap's regression trains on.
 
-    The frames where the gap's problem misses no column that fill whole blocks of the
-    window are summed from :func:`_block_moments`; the others are listed in ``rows``.
+    The frames of the window's whole blocks where every column is observed are summed from
+    the samples' running sums; the training frames outside them are listed with sign +1,
+    and the summed frames that are not training frames (points a problem hides beyond the
+    samples' own) with sign -1.
 
     Attributes
     ----------
     rows
         ``(G, F) int64`` rows of ``Samples.values``: each gap's listed frames, first, then
         the "no sample" row ``T`` up to the width ``F`` of the longest list.
+    signs
+        ``(G, F) float64``: +1 or -1 for each listed frame, 0 for padding.
     n_rows
         ``(G,) int64``: listed frames of each gap.
     n_train
-        ``(G,) int64``: training frames of each gap, listed or summed.
+        ``(G,) int64``: training frames of each gap.
     blocks
         ``(G, 2) int64``: the first and one past the last block summed for each gap.
     """
 
     rows: np.ndarray
+    signs: np.ndarray
     n_rows: np.ndarray
     n_train: np.ndarray
     blocks: np.ndarray
@@ -173,8 +209,7 @@ def _training_frames(
     needed
         ``(G, C) bool``: the columns that must be observed in a training frame.
     complete
-        ``(P, T) bool``: for each problem, the frames where no column is missing (summed
-        by blocks).
+        ``(T,) bool``: the frames the block sums cover where they cover a block.
     """
     n_frames = gaps.n_frames
     low = np.maximum(gaps.start - WINDOW, 0)
@@ -186,15 +221,18 @@ def _training_frames(
                        & _bit_sets(needed)[:, None]) == 0)
     blocks = np.stack([-(-low // BLOCK), high // BLOCK], axis=1)
     blocks[:, 1] = np.maximum(blocks[:, 1], blocks[:, 0])
-    summed = (complete[problem[:, None], window] & (window >= BLOCK * blocks[:, :1])
+    summed = (inside & complete[window] & (window >= BLOCK * blocks[:, :1])
               & (window < BLOCK * blocks[:, 1:]))
-    listed = train & ~summed
+    listed = train != summed
     n_rows = listed.sum(axis=1)
     gap, slot = np.nonzero(listed)
-    rows = np.full((len(gaps), max(int(n_rows.max(initial=0)), 1)), n_frames)
-    rows[gap, np.arange(gap.size) - np.repeat(np.cumsum(n_rows) - n_rows, n_rows)] = \
-        window[gap, slot]
-    return _Training(rows, n_rows, train.sum(axis=1), blocks)
+    place = (gap, np.arange(gap.size) - np.repeat(np.cumsum(n_rows) - n_rows, n_rows))
+    width = max(int(n_rows.max(initial=0)), 1)
+    rows = np.full((len(gaps), width), n_frames)
+    rows[place] = window[gap, slot]
+    signs = np.zeros((len(gaps), width))
+    signs[place] = np.where(train[gap, slot], 1.0, -1.0)
+    return _Training(rows, signs, n_rows, train.sum(axis=1), blocks)
 
 
 def _predict_gaps(
@@ -313,17 +351,16 @@ def regression_estimates(
         missing_bits[index] = _bit_sets(missing_columns)
         low[index], high[index] = samples.observed_range(~missing_columns)
     own = np.arange(columns.size) == np.searchsorted(columns, gaps.joint)[:, None]
-    complete = missing_bits == 0
-    training = _training_frames(missing_bits, problem, gaps, usable | own, complete)
-    running = np.stack([_block_moments(samples.values, frames) for frames in complete])
+    training = _training_frames(missing_bits, problem, gaps, usable | own, samples.complete)
     span = int(np.max(gaps.length, initial=0)) + 2
     predicted = np.empty((len(gaps), span, 2))
     by_size = np.argsort(training.n_rows, kind="stable")
     for batch in np.array_split(by_size, -(-len(gaps) // BATCH_GAPS)):
-        x = samples.values[training.rows[batch, :max(int(training.n_rows[batch].max()), 1)]]
+        listed = np.s_[batch, :max(int(training.n_rows[batch].max()), 1)]
+        x = samples.values[training.rows[listed]]
         first, last = training.blocks[batch].T
-        moments = (np.swapaxes(x, 1, 2) @ x + running[problem[batch], last]
-                   - running[problem[batch], first])
+        moments = (np.swapaxes(x * training.signs[listed][..., None], 1, 2) @ x
+                   + samples.running[last] - samples.running[first])
         predicted[batch] = _predict_gaps(samples, moments, gaps.select(batch), usable[batch],
                                          span)
     ok = usable.any(axis=1) & (training.n_train >= MIN_TRAINING_FRAMES)
