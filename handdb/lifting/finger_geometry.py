@@ -69,14 +69,23 @@ def orthographic_candidates(xy: np.ndarray, abs_dz: np.ndarray, palm_z: np.ndarr
     skeleton, layout
         The clip's skeleton, its palm and fingers.
     """
+    # Built component by component, each a contiguous fill, and then viewed with the
+    # components last: numpy fills an array with a small last axis slowly.
     anchors = anchor_joints(layout)
-    points = np.empty(palm_z.shape[:2] + (len(anchors), 3))
-    points[..., :2] = xy[:, None, anchors]
-    points[..., 2] = palm_z[:, :, anchors]
     chains = layout.chains
-    vectors = np.empty((len(xy), 1) + chains.shape + (2, 3))             # (T, 1, F, 3, 2, 3)
-    vectors[..., :2] = (xy[:, chains] - xy[:, skeleton.parents[chains]])[:, None, :, :, None]
-    vectors[..., 2] = abs_dz[:, None, chains, None] * np.array([1.0, -1.0])
+    x, y = xy[..., 0], xy[..., 1]
+    points = np.empty((3,) + palm_z.shape[:2] + (len(anchors),))        # (3, T, 2, A)
+    points[0] = x[:, None, anchors]
+    points[1] = y[:, None, anchors]
+    points[2] = palm_z[:, :, anchors]
+    parents = skeleton.parents[chains]
+    vectors = np.empty((3, 2, len(xy), 1) + chains.shape)                # (3, 2, T, 1, F, 3)
+    vectors[0] = (x[:, chains] - x[:, parents])[:, None]
+    vectors[1] = (y[:, chains] - y[:, parents])[:, None]
+    vectors[2, 0] = abs_dz[:, None, chains]
+    vectors[2, 1] = -vectors[2, 0]
+    points = np.moveaxis(points, 0, -1)
+    vectors = vectors.transpose(2, 3, 4, 5, 1, 0)                        # (T, 1, F, 3, 2, 3)
     bones = (vectors[:, :, :, 0][..., :, None, None, :],
              vectors[:, :, :, 1][..., None, :, None, :],
              vectors[:, :, :, 2][..., None, None, :, :])

@@ -167,7 +167,8 @@ def resolve_signs(
     frames = np.arange(n_frames)[:, None]
     chosen = scores.bone_log_odds[frames[:, 0], state]                   # (T, F, 3)
 
-    chain_dz = _chain_depths(candidates, state, scores.best[frames[:, 0], state])
+    chain_dz = _chain_depths(candidates, state, scores.best[frames[:, 0], state], abs_dz,
+                             layout)
     floor = TEMPORAL_FLOOR * bone_lengths[layout.chains].ravel()
     finger_odds = sign_posterior(chosen.reshape(n_frames, -1), chain_dz,
                                  acceleration_spread(chain_dz[:, :, 0], floor)
@@ -211,14 +212,18 @@ def _palm_depths(candidates: FingerCandidates, palm_z: np.ndarray, skeleton: Ske
     return (z[:, :, layout.palm_bones] - z[:, :, skeleton.root, None])[:, None]
 
 
-def _chain_depths(candidates: FingerCandidates, state: np.ndarray,
-                  best: np.ndarray) -> np.ndarray:
+def _chain_depths(candidates: FingerCandidates, state: np.ndarray, best: np.ndarray,
+                  abs_dz: np.ndarray, layout: HandLayout) -> np.ndarray:
     """Depth each finger bone spans under either sign, ``(T, F * 3, 2, 1)``.
 
     Bones above it take their signs from the frame's most likely state ``best`` ``(T, F)``
-    under the chosen palm state ``state`` ``(T,)``; orthographically those do not matter.
+    under the chosen palm state ``state`` ``(T,)``; orthographically those do not matter
+    and the two signs span opposite depths.
     """
     n_frames, n_fingers = best.shape
+    if candidates.joints is None:
+        magnitude = abs_dz[:, layout.chains].reshape(n_frames, -1, 1, 1)
+        return np.concatenate([magnitude, -magnitude], axis=2)
     full = (n_frames, 2, n_fingers, 2, 2, 2)
     frames, fingers = np.arange(n_frames)[:, None, None], np.arange(n_fingers)[None, :, None]
     own = np.array([0, 1])[None, None, :]

@@ -95,13 +95,12 @@ def _log_add_exp(a: float, b: float) -> float:
 
 
 @numba.njit(cache=True, nogil=True, error_model="numpy")
-def _acceleration_costs(values, weight):
-    """``cost[t, a, b, c]``, nats, of signs ``a, b, c`` (0: +, 1: −) at ``t − 2, t − 1, t``.
+def _acceleration_costs(values, weight, cost):
+    """Fill ``cost[t, a, b, c]``, nats, of signs ``a, b, c`` (0: +, 1: −) at ``t − 2, t − 1, t``.
 
     ``values`` is ``(T, 2, D)``: the chain's value under each sign.
     """
     n_frames, _, n_components = values.shape
-    cost = np.zeros((n_frames, 2, 2, 2))
     for t in range(2, n_frames):
         for a in range(2):
             for b in range(2):
@@ -112,7 +111,6 @@ def _acceleration_costs(values, weight):
                              + values[t - 2, a, d])
                         total += x * x
                     cost[t, a, b, c] = weight * total
-    return cost
 
 
 @numba.njit(cache=True, nogil=True, error_model="numpy")
@@ -120,19 +118,21 @@ def _forward_backward(evidence, values, weight, posterior):
     """Fill ``posterior`` ``(T, K)``; the chain's states are pairs of consecutive signs.
 
     ``forward[t, a, b]`` and ``backward[t, a, b]`` are the log-messages of signs ``a`` at
-    ``t − 1`` and ``b`` at ``t`` (0: +, 1: −).
+    ``t − 1`` and ``b`` at ``t`` (0: +, 1: −); ``emission[t, a]`` is frame ``t``'s own
+    evidence for sign ``a``.
     """
     n_frames, n_chains = evidence.shape
     if n_frames == 1:
         posterior[0] = evidence[0]
         return
+    cost = np.zeros((n_frames, 2, 2, 2))
+    emission = np.empty((n_frames, 2))
+    forward = np.empty((n_frames, 2, 2))
+    backward = np.zeros((n_frames, 2, 2))
     for k in range(n_chains):
-        cost = _acceleration_costs(values[:, k], weight[k])
-        emission = np.empty((n_frames, 2))
-        emission[:, 0] = 0.5 * evidence[:, k]
-        emission[:, 1] = -0.5 * evidence[:, k]
-        forward = np.empty((n_frames, 2, 2))
-        backward = np.zeros((n_frames, 2, 2))
+        _acceleration_costs(values[:, k], weight[k], cost)
+        for t in range(n_frames):
+            emission[t, 0], emission[t, 1] = 0.5 * evidence[t, k], -0.5 * evidence[t, k]
         for a in range(2):
             for b in range(2):
                 forward[1, a, b] = emission[0, a] + emission[1, b]
@@ -149,12 +149,16 @@ def _forward_backward(evidence, values, weight, posterior):
                         emission[t + 1, 0] - cost[t + 1, a, b, 0] + backward[t + 1, b, 0],
                         emission[t + 1, 1] - cost[t + 1, a, b, 1] + backward[t + 1, b, 1])
         for t in range(1, n_frames):
-            joint = forward[t] + backward[t]
-            posterior[t, k] = (_log_add_exp(joint[0, 0], joint[1, 0])
-                               - _log_add_exp(joint[0, 1], joint[1, 1]))
-        joint = forward[1] + backward[1]
-        posterior[0, k] = (_log_add_exp(joint[0, 0], joint[0, 1])
-                           - _log_add_exp(joint[1, 0], joint[1, 1]))
+            posterior[t, k] = (
+                _log_add_exp(forward[t, 0, 0] + backward[t, 0, 0],
+                             forward[t, 1, 0] + backward[t, 1, 0])
+                - _log_add_exp(forward[t, 0, 1] + backward[t, 0, 1],
+                               forward[t, 1, 1] + backward[t, 1, 1]))
+        posterior[0, k] = (
+            _log_add_exp(forward[1, 0, 0] + backward[1, 0, 0],
+                         forward[1, 0, 1] + backward[1, 0, 1])
+            - _log_add_exp(forward[1, 1, 0] + backward[1, 1, 0],
+                           forward[1, 1, 1] + backward[1, 1, 1]))
 
 
 def smooth_scale(bounds: np.ndarray, percentile: float = SCALE_PERCENTILE,
