@@ -101,10 +101,10 @@ def palm_motion(uv: np.ndarray, missing: np.ndarray, skeleton: Skeleton) -> Palm
         shaping = complete[shape_from] if complete.any() else fitted
         inverse = inverse_2x2(np.where(fitted[:, None, None], linear, np.eye(2)))
         canonical = apply_affine(inverse, -apply_linear(inverse, offset), shape_points)
-        canonical = np.where((shape_seen & shaping[:, None])[..., None], canonical, np.nan)
+        canonical[~(shape_seen & shaping[:, None])] = np.nan
         seen_once = ~np.isnan(canonical[..., 0]).all(axis=0)
-        reference = np.where(seen_once[:, None], _median(
-            np.where(seen_once[None, :, None], canonical, 0.0)), reference)
+        canonical[:, ~seen_once] = 0.0
+        reference = np.where(seen_once[:, None], _median(canonical), reference)
     linear, offset, kind = fit_maps_from_shape(reference, points, seen)
     fitted = kind == AFFINE
     if not fitted.any():
