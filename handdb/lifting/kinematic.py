@@ -7,34 +7,31 @@ signs are then chosen in three steps:
 
 1. **Palm.** The palm (wrist, carpometacarpal and long-finger MCP joints) is near rigid and
    near planar: of the sign patterns of its bones, the one whose joints fit a plane best is
-   kept, with its mirror image (the palm tilted the other way) as the only alternative.
-2. **Fingers.** For each palm state, the palm's normal points to the palmar side as the
-   hand's handedness says (``(index MCP − wrist) × (little MCP − wrist)`` for a right hand,
-   the opposite for a left one), and each finger's three bones below the palm take one of
-   eight sign states. A state is scored by its flexion angles in the finger's plane (the
-   plane of the finger's metacarpal and the palm normal): each joint within its range of
-   motion, flexing toward the palm, the DIP about 2/3 of the PIP. Scores are log-likelihoods.
-3. **Time.** A sign can only change while its bone crosses the image plane, at a local
-   minimum of ``|dZ|`` over time; between two minima the evidence of every frame is pooled
-   (:mod:`handdb.lifting.temporal`). The palm's tilt is pooled the same way, its evidence
-   being the fingers' likelihood under each tilt, each finger's say in a frame capped
-   (``FINGER_VOTE_CAP``) so that one finger the prior fits badly cannot flip the palm.
+   kept, with its mirror image (the palm tilted the other way) as the only alternative
+   (:mod:`handdb.lifting.palm`).
+2. **Fingers.** Under each palm state, each finger's three bones below the palm take one
+   of eight sign states, scored by the hand prior (:mod:`handdb.lifting.hand_prior`):
+   ranges of motion, flexion toward the palm, the DIP about 2/3 of the PIP.
+3. **Time.** Signed depths move smoothly: the palm's tilt and every bone's sign are chains
+   over the frames under a constant-velocity prior (:mod:`handdb.lifting.temporal`), so a
+   sign changes only where its bone passes through the image plane, and there the motion
+   goes on rather than bouncing back. The palm's evidence is the fingers' likelihood under
+   each tilt, each finger's say in a frame capped (``FINGER_VOTE_CAP``) so that one finger
+   the prior fits badly cannot flip the palm.
 
-The confidence of each bone's sign is its pooled posterior, discounted by the probability
-that the whole clip is mirrored: flipping every sign at once changes only the
+The confidence of each bone's sign is its posterior, discounted by the probability that
+the whole clip is mirrored: flipping every sign at once changes only the
 flexion-direction evidence, so a clip without clear flexion (a flat hand) cannot settle it,
 and the result says so (``mirror_ambiguous``).
 
-With a pinhole camera the signs are found on the weak-perspective view of the clip, then
-every joint is placed on its ray at the depth its bone length allows
-(:mod:`handdb.lifting.pinhole`).
+With a pinhole camera the root's depth comes from the weak-perspective lift
+(:func:`handdb.lifting.pinhole.estimate_root_depth`), then every joint is placed on its ray
+and the hand prior chooses among the two solutions of every bone.
 
 Measured (``benchmarks/lifting_results.py``; synthetic rapid gestures, 400 frames, mm,
-seeds 0-4): orthographic mean root-relative |dZ| 3.80 mm, sign accuracy 92.7 % (issue
-target 95 %); pinhole 11.64 mm (target 10 mm). Real DHG capture: orthographic 45.7 mm
-(thesis 47.6, flat guess 59.2), pinhole 21.8 mm (thesis 68.6). Throughput about 20 000
-frames/s orthographic (about 12 000 before the vectorised scan) on a shared core; target
-100 000.
+seeds 0-4): orthographic mean root-relative |dZ| 1.48 mm, sign accuracy 97.2 %; pinhole
+7.25 mm. Real DHG capture: orthographic 45.7 mm (thesis 47.5, flat guess 59.2), pinhole
+13.6 mm (thesis 68.6).
 """
 
 from __future__ import annotations
