@@ -88,15 +88,16 @@ def refine_bone_lengths(
     numpy.ndarray
         ``(T, J, 2) float64``: a refined copy.
     """
-    bounds = bone_bounds(uv, missing, skeleton, bone_lengths=bone_lengths, scale=scale)
+    bounds = bone_bounds(uv, missing, skeleton, bone_lengths=bone_lengths, scale=scale).T
     refined = uv.copy()
+    missing_by_joint = missing.T.copy()
     for b, (parent, child) in enumerate(skeleton.bones):
-        rows = np.flatnonzero(missing[:, child] | missing[:, parent])
+        rows = np.flatnonzero(missing_by_joint[child] | missing_by_joint[parent])
         bone = refined[rows, child] - refined[rows, parent]
-        length = np.linalg.norm(bone, axis=-1)
-        too_long = length > bounds[rows, b]
+        length = np.sqrt(bone[:, 0] ** 2 + bone[:, 1] ** 2)
+        too_long = length > bounds[b, rows]
         rows = rows[too_long]
-        bone = bone[too_long] * (bounds[rows, b] / length[too_long])[:, None]
+        bone = bone[too_long] * (bounds[b, rows] / length[too_long])[:, None]
         moves_child = missing[rows, child]
         refined[rows[moves_child], child] = refined[rows[moves_child], parent] + bone[moves_child]
         refined[rows[~moves_child], parent] = (refined[rows[~moves_child], child]
