@@ -10,9 +10,9 @@ from __future__ import annotations
 
 import itertools
 
-import numba
 import numpy as np
 
+from handdb.lifting.compiled import kernel
 from handdb.lifting.geometry import path_matrix
 from handdb.lifting.hand_layout import HandLayout
 from handdb.skeletons import Skeleton
@@ -76,7 +76,7 @@ def continuity_signs(depths: np.ndarray) -> np.ndarray:
     return np.cumprod(turn)
 
 
-@numba.njit(cache=True, nogil=True, error_model="numpy")
+@kernel
 def _best_plane_patterns(xy, spans, combos, ridge, best):
     """Fill ``best`` ``(T,)`` with the pattern whose joint depths fit a plane best.
 
@@ -120,7 +120,7 @@ def _best_plane_patterns(xy, spans, combos, ridge, best):
                 best[t] = c
 
 
-@numba.njit(cache=True, nogil=True, error_model="numpy")
+@kernel
 def _invert_3x3(m, out):
     """Write the inverse of the 3×3 matrix ``m`` to ``out`` (adjugate over determinant)."""
     for i in range(3):

@@ -15,9 +15,10 @@ from __future__ import annotations
 
 import math
 
-import numba
 import numpy as np
 from scipy.ndimage import gaussian_filter1d, percentile_filter
+
+from handdb.lifting.compiled import kernel
 
 #: Frames on each side of a frame that inform its scale.
 SCALE_HALF_WINDOW = 15
@@ -85,7 +86,7 @@ def sign_posterior(log_odds: np.ndarray, values: np.ndarray, spread: np.ndarray)
     return np.clip(posterior, -MAX_LOG_ODDS, MAX_LOG_ODDS)
 
 
-@numba.njit(cache=True, nogil=True, error_model="numpy")
+@kernel
 def _log_add_exp(a: float, b: float) -> float:
     """``log(e^a + e^b)``; the larger alone when the other adds less than ``e^-NEGLIGIBLE``."""
     high, low = max(a, b), min(a, b)
@@ -94,7 +95,7 @@ def _log_add_exp(a: float, b: float) -> float:
     return high + math.log1p(math.exp(low - high))
 
 
-@numba.njit(cache=True, nogil=True, error_model="numpy")
+@kernel
 def _acceleration_costs(values, weight, cost):
     """Fill ``cost[t, a, b, c]``, nats, of signs ``a, b, c`` (0: +, 1: −) at ``t − 2, t − 1, t``.
 
@@ -113,7 +114,7 @@ def _acceleration_costs(values, weight, cost):
                     cost[t, a, b, c] = weight * total
 
 
-@numba.njit(cache=True, nogil=True, error_model="numpy")
+@kernel
 def _forward_backward(evidence, values, weight, posterior):
     """Fill ``posterior`` ``(T, K)``; the chain's states are pairs of consecutive signs.
 
