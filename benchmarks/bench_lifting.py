@@ -22,17 +22,15 @@ from handdb.synthetic.clips import synthesize_clip
 
 LENGTHS = (400, 10_000, 100_000)
 
-#: Longest clip timed for the slow settings: the pinhole hand prior (its root-depth search
-#: walks 48 candidate depths per frame) and the least-squares refinement.
-SLOW_MAX_FRAMES = {"kinematic": 10_000, "kinematic-refined": 400}
+#: Longest clip timed for the slow settings: the least-squares refinement, and the
+#: model fit (a bounded least-squares problem per frame).
+SLOW_MAX_FRAMES = {"kinematic-refined": 400, "model-fit": 400}
 REPEATS = 3
 
 
-def too_slow(camera_model: str, method: str, n_frames: int) -> bool:
+def too_slow(method: str, n_frames: int) -> bool:
     """Whether a setting is left untimed (see :data:`SLOW_MAX_FRAMES`)."""
-    if method == "kinematic-refined" or (method == "kinematic" and camera_model == "pinhole"):
-        return n_frames > SLOW_MAX_FRAMES[method]
-    return False
+    return n_frames > SLOW_MAX_FRAMES.get(method, n_frames)
 
 
 def frames_per_second(uv, skeleton, lengths, camera, method) -> float:
@@ -59,7 +57,7 @@ def throughput_table(clip_lengths: tuple[int, ...] = LENGTHS) -> list[str]:
         for method in available_methods():
             rates = []
             for n_frames in clip_lengths:
-                if too_slow(camera_model, method, n_frames):
+                if too_slow(method, n_frames):
                     rates.append(float("nan"))
                     continue
                 uv = np.tile(clip.uv, (n_frames // len(clip.uv), 1, 1))

@@ -56,8 +56,10 @@ def flat_guess(truth: np.ndarray) -> np.ndarray:
     return flat
 
 
-#: Methods compared everywhere; the refinement is slow and compared in its own section.
-FAST_METHODS = tuple(m for m in available_methods() if m != "kinematic-refined")
+#: Methods compared everywhere. The refinement is slow and compared in its own section;
+#: the model fit takes about a minute per clip and is measured in RESULTS-fitting.md.
+FAST_METHODS = tuple(m for m in available_methods()
+                     if m not in ("kinematic-refined", "model-fit"))
 
 
 def compare(clip_id: str, uv, truth, skeleton, lengths, camera, hand, units,
@@ -170,7 +172,7 @@ def dhg_section() -> list[str]:
     }
     for view, (uv, camera) in views.items():
         summary = compare(f"dhg-{view}", uv, world, skeleton, lengths, camera, "right", "m",
-                          available_methods())
+                          FAST_METHODS)
         in_mm = {m: {**f, "dz_mean": f["dz_mean"] * 1000, "mpjpe": f["mpjpe"] * 1000}
                  for m, f in summary.items()}
         lines += table_rows(f"DHG, {view}", in_mm, "mm")

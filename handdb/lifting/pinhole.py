@@ -15,9 +15,12 @@ robust and smooth over time like the orthographic scale (:func:`estimate_root_de
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from handdb.clip import Camera
+from handdb.lifting.compiled import kernel
 from handdb.lifting.geometry import dot3, intrinsics
 from handdb.lifting.temporal import smooth_scale
 from handdb.skeletons import Skeleton
@@ -156,28 +159,72 @@ def deepest_feasible_root(rays: np.ndarray, guess: np.ndarray, skeleton: Skeleto
     numpy.ndarray
         ``(T,) float64``, clip units.
     """
-    tolerance = EXCESS_TOLERANCE * np.nansum(bone_lengths)
-    n_frames = len(rays)
     steps = np.linspace(np.log(DEPTH_BRACKET[0]), np.log(DEPTH_BRACKET[1]), DEPTH_GRID)
-    candidates = np.log(guess)[None, :] + steps[:, None]                  # (G, T)
+    depth = np.empty(len(rays))
+    _deepest_feasible(rays, skeleton.parents, skeleton.root, bone_lengths, bone_dz,
+                      np.log(guess), steps, EXCESS_TOLERANCE * np.nansum(bone_lengths),
+                      depth)
+    return depth
 
-    def feasible(log_depth: np.ndarray) -> np.ndarray:
-        grid = log_depth.reshape(-1, n_frames)
-        tiled = np.broadcast_to(rays, (len(grid),) + rays.shape).reshape(-1, *rays.shape[1:])
-        dz = np.broadcast_to(bone_dz, (len(grid),) + bone_dz.shape).reshape(-1, rays.shape[1])
-        _, excess = walk_rays(tiled, np.exp(grid.ravel()), skeleton, bone_lengths, dz)
-        return (np.nansum(excess, axis=1) <= tolerance).reshape(log_depth.shape)
 
-    ok = feasible(candidates)
-    deepest = np.where(ok.any(axis=0), DEPTH_GRID - 1 - np.argmax(ok[::-1], axis=0), 0)
-    low = candidates[deepest, np.arange(n_frames)]
-    high = low + (steps[1] - steps[0])
-    for _ in range(BISECTION_STEPS):
-        middle = 0.5 * (low + high)
-        good = feasible(middle[None])[0]
-        low = np.where(good, middle, low)
-        high = np.where(good, high, middle)
-    return np.exp(low)
+@kernel
+def _deepest_feasible(rays, parents, root, bone_lengths, bone_dz, log_guess, steps,
+                      tolerance, depth):
+    """Fill ``depth`` ``(T,)``: each frame's deepest feasible candidate, then bisected.
+
+    The candidates are ``exp(log_guess + steps)``; the bisection runs
+    :data:`BISECTION_STEPS` times toward the next, infeasible, candidate.
+    """
+    xyz = np.empty(rays.shape[1:])
+    for t in range(len(rays)):
+        deepest = 0
+        for g in range(len(steps) - 1, -1, -1):
+            if _feasible(rays[t], parents, root, bone_lengths, bone_dz[t], xyz,
+                         math.exp(log_guess[t] + steps[g]), tolerance):
+                deepest = g
+                break
+        low = log_guess[t] + steps[deepest]
+        high = low + (steps[1] - steps[0])
+        for _ in range(BISECTION_STEPS):
+            middle = 0.5 * (low + high)
+            if _feasible(rays[t], parents, root, bone_lengths, bone_dz[t], xyz,
+                         math.exp(middle), tolerance):
+                low = middle
+            else:
+                high = middle
+        depth[t] = math.exp(low)
+
+
+@kernel
+def _feasible(rays, parents, root, bone_lengths, bone_dz, xyz, root_depth, tolerance):
+    """Whether one frame's :func:`walk_rays` from ``root_depth`` stays within ``tolerance``.
+
+    The bones' excesses are summed (NaN: skipped) until they pass it; ``xyz`` ``(J, 3)`` is
+    scratch space for the joints' positions.
+    """
+    xyz[root] = rays[root] * root_depth
+    total = 0.0
+    for joint in range(len(parents)):
+        parent = parents[joint]
+        if parent < 0:
+            continue
+        ray, origin, length = rays[joint], xyz[parent], bone_lengths[joint]
+        a = ray[0] * ray[0] + ray[1] * ray[1] + ray[2] * ray[2]
+        b = ray[0] * origin[0] + ray[1] * origin[1] + ray[2] * origin[2]
+        nearest = b / a
+        miss_sq = max(origin[0] ** 2 + origin[1] ** 2 + origin[2] ** 2 - b * nearest, 0.0)
+        half_chord = math.sqrt(max(length**2 - miss_sq, 0.0) / a)
+        far, near = nearest + half_chord, nearest - half_chord
+        wanted = origin[2] + bone_dz[joint]
+        scale = far if abs(far * ray[2] - wanted) <= abs(near * ray[2] - wanted) else near
+        for k in range(3):
+            xyz[joint, k] = ray[k] * scale
+        excess = max(math.sqrt(miss_sq) - length, 0.0)
+        if not math.isnan(excess):
+            total += excess
+            if total > tolerance:
+                return False
+    return True
 
 
 def estimate_root_depth(uv: np.ndarray, skeleton: Skeleton, bone_lengths: np.ndarray,
