@@ -155,7 +155,8 @@ def _block_moments(values: np.ndarray, complete: np.ndarray) -> np.ndarray:
     """
     n_blocks = complete.size // BLOCK
     framed = n_blocks * BLOCK
-    x = np.where(complete[:framed, None], values[:framed], 0.0).reshape(n_blocks, BLOCK, -1)
+    x = np.where(complete[:framed, None], values[:framed], 0.0).reshape(n_blocks, BLOCK,
+                                                                       values.shape[1])
     running = np.zeros((n_blocks + 1, x.shape[2], x.shape[2]))
     # A copy of the transposed blocks: numpy multiplies a view of x by x itself slower.
     np.cumsum(np.ascontiguousarray(np.swapaxes(x, 1, 2)) @ x, axis=0, out=running[1:])

@@ -97,6 +97,19 @@ def test_edges_and_a_never_seen_joint_are_filled_and_flagged(rapid_clip, mediapi
     assert (result.fill_method[:, wrist] == "rest-pose").all()
 
 
+@pytest.mark.parametrize("n_frames", [12, 31, 33, 70])
+def test_default_bridges_a_long_finger_gap_in_a_clip_of_few_blocks(n_frames, rapid_clip,
+                                                                    mediapipe):
+    uv = rapid_clip.uv[:n_frames]
+    tip = mediapipe.index("index_tip")
+    observed = _hide(n_frames, mediapipe.n_joints, [(tip, 1, n_frames - 1)])
+    result = fill_gaps(uv, observed, mediapipe)
+    assert result.filled[~observed].all()
+    assert set(result.fill_method[~observed]) == {"validated"}
+    hand_size = np.ptp(uv[0], axis=0).max()
+    assert np.linalg.norm(result.uv[~observed] - uv[~observed], axis=-1).max() < hand_size / 2
+
+
 @pytest.mark.parametrize("method", sorted(METHODS))
 def test_inputs_are_never_mutated(method, rapid_clip, mediapipe):
     uv = rapid_clip.uv[:60].copy()
