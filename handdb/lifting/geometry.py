@@ -23,28 +23,10 @@ def dot3(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     return a[..., 0] * b[..., 0] + a[..., 1] * b[..., 1] + a[..., 2] * b[..., 2]
 
 
-def bone_vectors_2d(uv: np.ndarray, skeleton: Skeleton) -> np.ndarray:
-    """Image vector from each joint's parent to the joint.
-
-    Parameters
-    ----------
-    uv
-        ``(T, J, 2) float64``, pixels.
-    skeleton
-        Gives the parent of every joint.
-
-    Returns
-    -------
-    numpy.ndarray
-        ``(T, J, 2) float64``, pixels; zero at the root.
-    """
-    parents = np.where(skeleton.parents < 0, np.arange(skeleton.n_joints), skeleton.parents)
-    return uv - uv[:, parents]
-
-
 def projected_lengths(uv: np.ndarray, skeleton: Skeleton) -> np.ndarray:
     """Image length of the bone ending at each joint, ``(T, J) float64`` pixels (root: 0)."""
-    return np.linalg.norm(bone_vectors_2d(uv, skeleton), axis=-1)
+    parents = np.where(skeleton.parents < 0, np.arange(skeleton.n_joints), skeleton.parents)
+    return np.hypot(uv[..., 0] - uv[:, parents, 0], uv[..., 1] - uv[:, parents, 1])
 
 
 def eq6_scale(projected: np.ndarray, bone_lengths: np.ndarray, rank: int = 1) -> np.ndarray:
@@ -167,7 +149,10 @@ def orthographic_points(uv: np.ndarray, scale: np.ndarray, z: np.ndarray) -> np.
     numpy.ndarray
         ``(T, J, 3) float64``, clip units.
     """
-    return np.concatenate([uv / scale[:, None, None], z[..., None]], axis=-1)
+    xyz = np.empty(z.shape + (3,))
+    xyz[..., :2] = uv / scale[:, None, None]
+    xyz[..., 2] = z
+    return xyz
 
 
 def intrinsics(camera: Camera) -> tuple[float, float, float, float]:
