@@ -65,9 +65,6 @@ from handdb.lifting.result import LiftResult
 from handdb.lifting.temporal import acceleration_spread, sigmoid, sign_posterior, smooth_scale
 from handdb.skeletons import Skeleton
 
-#: the next round's root depth).
-PINHOLE_PASSES = 2
-
 #: The scale of a frame lets its most stretched bone be an outlier (see
 #: :func:`handdb.lifting.geometry.eq6_scale`): trackers' bones vary in length.
 SCALE_RANK = 2
@@ -161,11 +158,11 @@ def resolve_signs(
     palm_odds = sign_posterior(votes.sum(axis=1, keepdims=True), palm_depths,
                                acceleration_spread(palm_depths[:, :, 0], floor))[:, 0]
     state = (palm_odds < 0).astype(np.int64)
-    frames = np.arange(n_frames)[:, None]
-    chosen = scores.bone_log_odds[frames[:, 0], state]                   # (T, F, 3)
+    frames = np.arange(n_frames)
+    chosen = scores.bone_log_odds[frames, state]                         # (T, F, 3)
+    best = scores.best[frames, state]                                    # (T, F)
 
-    chain_dz = _chain_depths(candidates, state, scores.best[frames[:, 0], state], abs_dz,
-                             layout)
+    chain_dz = _chain_depths(candidates, state, best, abs_dz, layout)
     floor = TEMPORAL_FLOOR * bone_lengths[layout.chains].ravel()
     finger_odds = sign_posterior(chosen.reshape(n_frames, -1), chain_dz,
                                  acceleration_spread(chain_dz[:, :, 0], floor)
@@ -174,10 +171,9 @@ def resolve_signs(
 
     # The mirror flips the palm tilt and every finger state at once. Compare each frame's
     # best pose under the chosen tilt with its exact mirror image, on anatomy alone.
-    fingers = np.arange(len(layout.fingers))[None, :]
-    best = scores.best[frames[:, 0], state]                              # (T, F)
-    own = scores.anatomy[frames, state[:, None], fingers, best]
-    mirror = scores.anatomy[frames, 1 - state[:, None], fingers, len(SIGN_STATES) - 1 - best]
+    rows, fingers = frames[:, None], np.arange(len(layout.fingers))[None, :]
+    own = scores.anatomy[rows, state[:, None], fingers, best]
+    mirror = scores.anatomy[rows, 1 - state[:, None], fingers, len(SIGN_STATES) - 1 - best]
     mirror_log_odds = float(np.sum(own - mirror))
     if mirror_log_odds < 0:
         mirror_log_odds, state, finger_signs = -mirror_log_odds, 1 - state, -finger_signs
