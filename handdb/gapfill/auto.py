@@ -29,7 +29,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from handdb.gapfill.gaps import Gaps, find_gaps
+from handdb.gapfill.gaps import Gaps, find_gaps, mask_points
 from handdb.gapfill.interpolate import interpolate_gaps
 from handdb.gapfill.lowrank import DEFAULT_VARIANCE, blend_to_edges, lowrank_reconstruct
 from handdb.gapfill.palm_frame import palm_motion, to_image, to_palm_frame
@@ -209,7 +209,7 @@ def fill_auto(
         filled = _long_gap_fill(local, filled, unknown, gaps.select(by_model), skeleton,
                                 long_gaps, variance)
     if motion is not None:
-        frame, joint = np.nonzero(unknown)
+        frame, joint = mask_points(unknown)
         local_filled = filled[frame, joint]
         filled = placed.copy()
         filled[frame, joint] = to_image(local_filled, motion, frame)

@@ -100,3 +100,12 @@ def find_gaps(missing: np.ndarray) -> Gaps:
     # Each joint's row starts and ends unmissing, so its changes alternate start, stop.
     joint, frame = np.divmod(np.flatnonzero(by_joint[:, 1:] != by_joint[:, :-1]), n_frames + 1)
     return Gaps(joint[::2], frame[::2], frame[1::2], int(n_frames))
+
+
+def mask_points(mask: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Rows and columns where a 2-D ``mask`` is set, in row-major order.
+
+    The same as ``np.nonzero(mask)``, from one flat scan (several times faster on
+    ``(T, J)`` masks).
+    """
+    return np.divmod(np.flatnonzero(mask), mask.shape[1])

@@ -16,7 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from handdb.errors import HanddbError
-from handdb.gapfill.gaps import find_gaps
+from handdb.gapfill.gaps import find_gaps, mask_points
 from handdb.skeletons import Skeleton
 
 #: Flag kinds. A gap at the start of the clip (the joint is missing in the first frame).
@@ -212,7 +212,7 @@ def fill_gaps(
             f"skeleton '{skeleton.name}'; got {uv.shape} and {observed.shape}"
         )
     missing = ~observed | ~(np.isfinite(uv[..., 0]) & np.isfinite(uv[..., 1]))
-    frame, joint = np.nonzero(missing)
+    frame, joint = mask_points(missing)
     hidden = uv.copy()
     hidden[frame, joint] = np.nan
     output = METHODS[method].fill(hidden, missing, skeleton, **params)

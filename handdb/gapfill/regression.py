@@ -21,7 +21,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from handdb.gapfill.gaps import Gaps
+from handdb.gapfill.gaps import Gaps, mask_points
 
 #: Frames either side of a gap whose samples train its regression.
 WINDOW = 400
@@ -84,7 +84,7 @@ class Samples:
         ``seen`` is a subset of :attr:`seen`; only the columns where a point it leaves out
         holds an extreme are searched again.
         """
-        frame, column = np.nonzero(self.seen & ~seen)
+        frame, column = mask_points(self.seen & ~seen)
         pair = 2 * column[:, None] + np.arange(2)
         left_out = self.values[frame[:, None], pair] + self.centre[pair]
         extreme = (left_out == self.low[pair]) | (left_out == self.high[pair])
@@ -227,7 +227,7 @@ def _training_frames(
               & (window < BLOCK * blocks[:, 1:]))
     listed = train != summed
     n_rows = listed.sum(axis=1)
-    gap, slot = np.nonzero(listed)
+    gap, slot = mask_points(listed)
     place = (gap, np.arange(gap.size) - np.repeat(np.cumsum(n_rows) - n_rows, n_rows))
     width = max(int(n_rows.max(initial=0)), 1)
     rows = np.full((len(gaps), width), n_frames)

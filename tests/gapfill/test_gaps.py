@@ -1,6 +1,7 @@
 import numpy as np
+import pytest
 
-from handdb.gapfill.gaps import find_gaps
+from handdb.gapfill.gaps import find_gaps, mask_points
 
 
 def test_find_gaps_classifies_runs():
@@ -27,3 +28,24 @@ def test_frames_lists_every_missing_point_once():
     rebuilt[frame, joint] = True
     assert np.array_equal(rebuilt, missing)
     assert frame.size == missing.sum()
+
+
+@pytest.mark.parametrize("shape", [(1, 1), (2, 3), (7, 21), (400, 22)])
+def test_gaps_are_the_maximal_runs_of_a_random_mask(shape):
+    missing = np.random.default_rng(shape[0]).random(shape) < 0.4
+    gaps = find_gaps(missing)
+    _, frame, joint = gaps.frames()
+    rebuilt = np.zeros_like(missing)
+    rebuilt[frame, joint] = True
+    assert np.array_equal(rebuilt, missing) and frame.size == missing.sum()
+    padded = np.pad(missing, ((1, 1), (0, 0)))
+    assert not padded[gaps.start, gaps.joint].any()        # the frame before each gap
+    assert not padded[gaps.stop + 1, gaps.joint].any()     # the frame after each gap
+
+
+@pytest.mark.parametrize("shape", [(0, 3), (1, 1), (5, 21), (400, 22)])
+def test_mask_points_are_nonzero_in_row_major_order(shape):
+    mask = np.random.default_rng(len(shape) + shape[0]).random(shape) < 0.3
+    frame, joint = mask_points(mask)
+    expected = np.nonzero(mask)
+    assert np.array_equal(frame, expected[0]) and np.array_equal(joint, expected[1])
