@@ -142,18 +142,17 @@ def method_names(family: str | None = None) -> tuple[str, ...]:
 
 def _edge_flags(missing: np.ndarray, skeleton: Skeleton) -> list[GapFlag]:
     gaps = find_gaps(missing)
+    edges = gaps.select(gaps.leading | gaps.trailing)
     flags = []
     for j, start, stop, whole, leading in zip(
-        gaps.joint, gaps.start, gaps.stop, gaps.whole_clip, gaps.leading, strict=True
+        edges.joint, edges.start, edges.stop, edges.whole_clip, edges.leading, strict=True
     ):
         if whole:
             kind, note = WHOLE_CLIP, "never observed in the clip"
         elif leading:
             kind, note = LEADING, "missing from the first frame: no earlier data"
-        elif stop == gaps.n_frames:
-            kind, note = TRAILING, "missing to the last frame: no later data"
         else:
-            continue
+            kind, note = TRAILING, "missing to the last frame: no later data"
         flags.append(GapFlag(skeleton.joints[j], int(start), int(stop), kind, note))
     return flags
 
