@@ -167,16 +167,18 @@ def fit_maps_from_shape(
     maps = maps.reshape(point_sets.size, n_params, 6)
     constant, slope = maps[:, 0], maps[:, 1:] - maps[:, :1]
     set_of = set_of.ravel()
-    order = np.argsort(set_of, kind="stable")
-    by_set = np.where(np.repeat(weights, 2, axis=1), target.reshape(n_targets, -1), 0.0)[order]
-    fitted = np.empty((n_targets, 6))
-    sizes = np.bincount(set_of)
-    stops = np.cumsum(sizes)
-    for index, (start, stop) in enumerate(zip(stops - sizes, stops, strict=True)):
-        fitted[start:stop] = by_set[start:stop] @ slope[index] + constant[index]
-    unsorted = np.empty_like(fitted)
-    unsorted[order] = fitted
-    return unsorted[:, :4].reshape(n_targets, 2, 2), unsorted[:, 4:], kind[::n_params][set_of]
+    flat_target = np.where(np.repeat(weights, 2, axis=1), target.reshape(n_targets, -1), 0.0)
+    if point_sets.size == 1:
+        fitted = flat_target @ slope[0] + constant[0]
+    else:
+        order = np.argsort(set_of, kind="stable")
+        by_set = flat_target[order]
+        sizes = np.bincount(set_of)
+        stops = np.cumsum(sizes)
+        fitted = np.empty((n_targets, 6))
+        for index, (start, stop) in enumerate(zip(stops - sizes, stops, strict=True)):
+            fitted[order[start:stop]] = by_set[start:stop] @ slope[index] + constant[index]
+    return fitted[:, :4].reshape(n_targets, 2, 2), fitted[:, 4:], kind[::n_params][set_of]
 
 
 def map_points(
