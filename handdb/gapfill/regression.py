@@ -10,8 +10,14 @@ asked to extrapolate far cannot throw the point across the image.
 
 It is the low-rank idea (other joints predict the missing one) fitted per gap, without
 iterations. Palm points are left out as predictors: in the palm frame they hardly move.
-The regressions of many gaps are fitted at once: each gap's training frames and predictors
-are masks over a padded window, and the stacked normal equations are solved together.
+
+The regressions of many gaps are fitted at once. The clip's coordinates are gathered once
+(:func:`regression_samples`) with a column of ones, so a gap's counts, sums and scatter are
+the sum of the outer products of its training rows. The frames where every joint is seen
+are summed by blocks of :data:`BLOCK` frames in running sums, so a gap's window costs two
+look-ups for its whole blocks, and only its other training frames (and, with a sign, the
+frames another problem hides, such as the validation's hidden runs) are gathered. Gaps of
+similar list lengths are stacked in batches and their normal equations solved together.
 """
 
 from __future__ import annotations
