@@ -24,14 +24,14 @@ the whole clip is mirrored: flipping every sign at once changes only the
 flexion-direction evidence, so a clip without clear flexion (a flat hand) cannot settle it,
 and the result says so (``mirror_ambiguous``).
 
-With a pinhole camera the root's depth comes from the weak-perspective lift
+With a pinhole camera the root's depth comes from the bone lengths and the rays
 (:func:`handdb.lifting.pinhole.estimate_root_depth`), then every joint is placed on its ray
 and the hand prior chooses among the two solutions of every bone.
 
 Measured (``benchmarks/lifting_results.py``; synthetic rapid gestures, 400 frames, mm,
 seeds 0-4): orthographic mean root-relative |dZ| 1.48 mm, sign accuracy 97.2 %; pinhole
-7.25 mm. Real DHG capture: orthographic 45.7 mm (thesis 47.5, flat guess 59.2), pinhole
-13.6 mm (thesis 68.6).
+5.91 mm. Real DHG capture: orthographic 45.7 mm (thesis 47.5, flat guess 59.2), pinhole
+13.5 mm (thesis 68.6).
 """
 
 from __future__ import annotations
@@ -250,9 +250,9 @@ def _chosen_points(solution: SignSolution, skeleton: Skeleton) -> np.ndarray:
 
 
 def _lift_pinhole(uv: np.ndarray, skeleton: Skeleton, bone_lengths: np.ndarray,
-                  camera: Camera, hand: str, weak_scale: np.ndarray,
-                  weak_dz: np.ndarray) -> tuple[np.ndarray, np.ndarray, SignSolution]:
-    """Lift a pinhole clip: root depth from the weak-perspective lift, signs on the rays.
+                  camera: Camera, hand: str,
+                  weak_scale: np.ndarray) -> tuple[np.ndarray, np.ndarray, SignSolution]:
+    """Lift a pinhole clip: the root's depth from the bone lengths, then signs on the rays.
 
     The root's depth comes from :func:`handdb.lifting.pinhole.estimate_root_depth`. The
     palm and finger candidates are then the two roots of every bone's ray quadratic
@@ -268,7 +268,7 @@ def _lift_pinhole(uv: np.ndarray, skeleton: Skeleton, bone_lengths: np.ndarray,
     rays = camera_rays(uv, camera)
     root = skeleton.root
     parent, child = skeleton.bones.T
-    depth = estimate_root_depth(uv, skeleton, bone_lengths, camera, weak_dz, weak_scale)
+    depth = estimate_root_depth(uv, skeleton, bone_lengths, camera, weak_scale)
     metric_xy = (rays[..., :2] - rays[:, root : root + 1, :2]) * depth[:, None, None]
     abs_dz, _ = depth_magnitudes(projected_lengths(metric_xy, skeleton), bone_lengths,
                                  np.ones(len(uv)))
@@ -298,14 +298,14 @@ def lift_kinematic(uv: np.ndarray, skeleton: Skeleton, bone_lengths: np.ndarray,
     image = centred_pixels(uv, camera)
     projected = projected_lengths(image, skeleton)
     scale = smooth_scale(eq6_scale(projected, bone_lengths, rank=SCALE_RANK))
-    abs_dz, inconsistency = depth_magnitudes(projected, bone_lengths, scale)
-    xy = image / scale[:, None, None]
-    solution = resolve_signs(xy, abs_dz, bone_lengths, skeleton, hand)
     if camera.model == "pinhole":
-        xyz, inconsistency, solution = _lift_pinhole(
-            uv, skeleton, bone_lengths, camera, hand, scale, solution.signs * abs_dz)
+        xyz, inconsistency, solution = _lift_pinhole(uv, skeleton, bone_lengths, camera, hand,
+                                                     scale)
         scale = np.full(scale.shape, np.nan)
     else:
+        abs_dz, inconsistency = depth_magnitudes(projected, bone_lengths, scale)
+        solution = resolve_signs(image / scale[:, None, None], abs_dz, bone_lengths,
+                                 skeleton, hand)
         z = accumulate_depths(solution.signs * abs_dz, skeleton)
         xyz = orthographic_points(image, scale, z)
     inconsistency[:, skeleton.root] = 0.0
