@@ -1,7 +1,9 @@
 """Throughput of depth reconstruction (issue 4): frames per second of every lifting method.
 
 Clips of rapid gestures (mediapipe21, 21 joints), orthographic and pinhole, at several
-lengths; the best of a few runs of :func:`handdb.lifting.lift` per setting. The machine's
+lengths; the best of a few runs of :func:`handdb.lifting.lift` per setting. Then the
+default lifting many clips at once on one thread and on one per core, as the build's
+worker threads do. The machine's
 load average is printed too, since the figures scale with the share of a core the
 process gets.
 
@@ -12,6 +14,7 @@ from __future__ import annotations
 
 import os
 import time
+from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
 
@@ -68,8 +71,39 @@ def throughput_table(clip_lengths: tuple[int, ...] = LENGTHS) -> list[str]:
     return lines
 
 
+def parallel_throughput(n_frames: int = 10_000, clips_per_worker: int = 4) -> list[str]:
+    """Frames per second of the default lifting many clips at once, as the pipeline does.
+
+    The build lifts clips concurrently on its worker threads; the compiled kernels release
+    the GIL, so the machine's cores share the work. Clips of rapid gestures (orthographic,
+    seeds 0-3) are lifted by 1 thread and by one per core, wall-clock, best of
+    :data:`REPEATS`.
+    """
+    batch = []
+    for seed in range(4):
+        clip = synthesize_clip("rapid", 400, seed=seed)
+        skeleton = load_skeleton(clip.skeleton)
+        lengths = bone_length_array(skeleton, clip.bone_lengths)
+        batch.append((np.tile(clip.uv, (n_frames // len(clip.uv), 1, 1)), skeleton, lengths))
+    lines = [f"Default method, orthographic, {n_frames}-frame clips lifted concurrently "
+             f"(load average {os.getloadavg()[0]:.1f}):", "",
+             "| threads | frames per second |", "|---:|---:|"]
+    for workers in sorted({1, os.cpu_count() or 1}):
+        clips = [batch[i % len(batch)] for i in range(workers * clips_per_worker)]
+        best = float("inf")
+        for _ in range(REPEATS):
+            start = time.perf_counter()
+            with ThreadPoolExecutor(workers) as pool:
+                list(pool.map(lambda c: lift(c[0], c[1], c[2], Camera()), clips))
+            best = min(best, time.perf_counter() - start)
+        lines.append(f"| {workers} | {len(clips) * n_frames / best:,.0f} |")
+    return lines
+
+
 def main() -> None:
     print("\n".join(throughput_table()))
+    print()
+    print("\n".join(parallel_throughput()))
 
 
 if __name__ == "__main__":
