@@ -99,7 +99,8 @@ def palm_motion(uv: np.ndarray, missing: np.ndarray, skeleton: Skeleton) -> Palm
         linear, offset, kind = fit_maps_from_shape(reference, shape_points, shape_seen)
         fitted = kind == AFFINE
         shaping = complete[shape_from] if complete.any() else fitted
-        inverse = inverse_2x2(np.where(fitted[:, None, None], linear, np.eye(2)))
+        linear[~fitted] = np.eye(2)
+        inverse = inverse_2x2(linear)
         canonical = apply_affine(inverse, -apply_linear(inverse, offset), shape_points)
         canonical[~(shape_seen & shaping[:, None])] = np.nan
         seen_once = ~np.isnan(canonical[..., 0]).all(axis=0)

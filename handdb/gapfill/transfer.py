@@ -39,8 +39,8 @@ def apply_affine(linear: np.ndarray, offset: np.ndarray, points: np.ndarray) -> 
 def inverse_2x2(matrices: np.ndarray) -> np.ndarray:
     """Invert ``(N, 2, 2)`` matrices in closed form (no check: singular ones give inf/NaN)."""
     (a, b), (c, d) = np.moveaxis(matrices, (-2, -1), (0, 1))
-    adjugate = np.stack([np.stack([d, -b], -1), np.stack([-c, a], -1)], -2)
-    return adjugate / (a * d - b * c)[..., None, None]
+    det = a * d - b * c
+    return np.stack([d / det, -b / det, -c / det, a / det], axis=-1).reshape(matrices.shape)
 
 
 def _member_bits(members: np.ndarray) -> np.ndarray:
