@@ -141,7 +141,7 @@ def speed(repeats):
           f"{'wall ms':>8s} {'frames per wall-second':>23s}")
     for n_frames in SPEED_FRAMES:
         uv, hidden = speed_clip(n_frames, 0.05, skeleton)
-        runs = max(repeats, repeats * SPEED_FRAMES[-1] // (2 * n_frames))
+        runs = max(repeats, repeats * SPEED_FRAMES[-1] // n_frames)
         wall, cpu = _timed(uv, ~hidden, skeleton, DEFAULT_METHOD, runs)
         print(f"  {n_frames:6d} {hidden.mean():6.1%} {cpu * 1e3:8.1f} {n_frames / cpu:22,.0f} "
               f"{wall * 1e3:8.1f} {n_frames / wall:23,.0f}")

@@ -127,8 +127,13 @@ def validation_mask(missing: np.ndarray, gaps: Gaps, seed: int = 0) -> np.ndarra
     hidden = np.zeros_like(missing)
     missing_so_far = np.zeros((missing.shape[1], n_frames + 1), dtype=np.int32)
     np.cumsum(missing.T, axis=1, out=missing_so_far[:, 1:])
-    for joint in np.unique(gaps.joint):
-        length = int(min(np.median(gaps.length[gaps.joint == joint]), n_frames // 4))
+    by_joint = np.lexsort((gaps.length, gaps.joint))
+    joints, first, counts = np.unique(gaps.joint[by_joint], return_index=True,
+                                      return_counts=True)
+    ordered = gaps.length[by_joint]
+    medians = 0.5 * (ordered[first + (counts - 1) // 2] + ordered[first + counts // 2])
+    lengths = np.minimum(medians, n_frames // 4).astype(np.int64)
+    for joint, length in zip(joints, lengths, strict=True):
         so_far = missing_so_far[joint]
         clear = so_far[length + 2:] == so_far[:n_frames - length - 1]
         starts = np.flatnonzero(clear) + 1

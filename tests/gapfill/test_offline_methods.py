@@ -3,6 +3,7 @@ import pytest
 from scipy.interpolate import PchipInterpolator
 
 from handdb.gapfill import METHODS, UNFILLED, fill_gaps
+from handdb.gapfill.auto import VALIDATION_GAPS, validation_mask
 from handdb.gapfill.gaps import find_gaps
 from handdb.gapfill.interpolate import interpolate_gaps
 from handdb.gapfill.lowrank import lowrank_reconstruct
@@ -183,3 +184,21 @@ def test_pchip_with_few_samples_equals_scipy_and_holds_the_ends(n_seen):
     else:
         expected = PchipInterpolator(seen_frames, uv[seen_frames, 0])(at)
     assert np.allclose(filled[:, 0], expected, rtol=0, atol=1e-12)
+
+
+def test_validation_runs_are_observed_runs_as_long_as_the_joints_median_gap():
+    rng = np.random.default_rng(4)
+    missing = np.zeros((300, 5), dtype=bool)
+    for joint, (start, lengths) in enumerate([(10, (12, 20, 40)), (40, (9, 9)), (0, (15,))]):
+        for length in lengths:
+            missing[start:start + length, joint] = True
+            start += length + int(rng.integers(20, 60))
+    gaps = find_gaps(missing)
+    hidden = validation_mask(missing, gaps)
+    assert not (hidden & missing).any() and not hidden[:, 3:].any()
+    runs = find_gaps(hidden)
+    assert np.bincount(runs.joint).max() <= VALIDATION_GAPS
+    assert set(runs.length[runs.joint == 0]) == {20} and set(runs.length[runs.joint == 1]) == {9}
+    around = np.pad(missing | hidden, ((1, 1), (0, 0)), constant_values=True)
+    assert not around[runs.start, runs.joint].any()          # observed just before each run
+    assert not around[runs.stop + 1, runs.joint].any()       # and just after it
