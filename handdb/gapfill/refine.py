@@ -10,8 +10,11 @@ never move. Bones are visited from the root outward, once.
 
 from __future__ import annotations
 
+from functools import cache
+
 import numpy as np
 
+from handdb.gapfill.gaps import mask_points
 from handdb.skeletons import Skeleton
 
 #: Slack on the longest projected length a bone was observed with, as a factor.
@@ -88,18 +91,40 @@ def refine_bone_lengths(
     numpy.ndarray
         ``(T, J, 2) float64``: a refined copy.
     """
-    bounds = bone_bounds(uv, missing, skeleton, bone_lengths=bone_lengths, scale=scale).T
+    bounds = bone_bounds(uv, missing, skeleton, bone_lengths=bone_lengths, scale=scale)
     refined = uv.copy()
-    missing_by_joint = missing.T.copy()
-    for b, (parent, child) in enumerate(skeleton.bones):
-        rows = np.flatnonzero(missing_by_joint[child] | missing_by_joint[parent])
-        bone = refined[rows, child] - refined[rows, parent]
+    for bones in _bone_rounds(tuple(skeleton.parents)):
+        parent, child = skeleton.bones[bones].T
+        frame, which = mask_points(np.take(missing, child, axis=1)
+                                   | np.take(missing, parent, axis=1))
+        parent, child = parent[which], child[which]
+        bone = refined[frame, child] - refined[frame, parent]
         length = np.sqrt(bone[:, 0] ** 2 + bone[:, 1] ** 2)
-        too_long = length > bounds[b, rows]
-        rows = rows[too_long]
-        bone = bone[too_long] * (bounds[b, rows] / length[too_long])[:, None]
-        moves_child = missing[rows, child]
-        refined[rows[moves_child], child] = refined[rows[moves_child], parent] + bone[moves_child]
-        refined[rows[~moves_child], parent] = (refined[rows[~moves_child], child]
-                                               - bone[~moves_child])
+        bound = bounds[frame, bones[which]]
+        too_long = length > bound
+        frame, parent, child = frame[too_long], parent[too_long], child[too_long]
+        bone = bone[too_long] * (bound[too_long] / length[too_long])[:, None]
+        moves_child = missing[frame, child]
+        moved, kept = np.flatnonzero(moves_child), np.flatnonzero(~moves_child)
+        refined[frame[moved], child[moved]] = refined[frame[moved], parent[moved]] + bone[moved]
+        refined[frame[kept], parent[kept]] = refined[frame[kept], child[kept]] - bone[kept]
     return refined
+
+
+@cache
+def _bone_rounds(parents: tuple[int, ...]) -> tuple[np.ndarray, ...]:
+    """Bones (indices into ``Skeleton.bones``) that refinement can pull together, in turn.
+
+    Bones are visited from the root outward: by depth, and among bones of one parent (which
+    may pull that parent) one at a time in joint order. Within a round no two bones share
+    a joint, so the rounds give what visiting the bones one by one in joint order gives.
+    """
+    parent = np.asarray(parents)
+    child = np.flatnonzero(parent >= 0)
+    depth = np.zeros(parent.size, dtype=np.int64)
+    for joint in child:
+        depth[joint] = depth[parent[joint]] + 1
+    sibling_rank = np.array([np.count_nonzero(parent[child[:b]] == parent[c])
+                             for b, c in enumerate(child)])
+    keys = depth[child] * parent.size + sibling_rank
+    return tuple(np.flatnonzero(keys == key) for key in np.unique(keys))

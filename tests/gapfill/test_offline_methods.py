@@ -7,9 +7,10 @@ from handdb.gapfill.auto import VALIDATION_GAPS, validation_mask
 from handdb.gapfill.gaps import find_gaps
 from handdb.gapfill.interpolate import interpolate_gaps
 from handdb.gapfill.lowrank import lowrank_reconstruct
-from handdb.gapfill.refine import refine_bone_lengths
+from handdb.gapfill.refine import bone_bounds, refine_bone_lengths
 from handdb.gapfill.regression import regression_fill
 from handdb.gapfill.rigid import palm_joints
+from handdb.skeletons import load_skeleton
 
 
 def _hide(n_frames, n_joints, gaps):
@@ -202,3 +203,32 @@ def test_validation_runs_are_observed_runs_as_long_as_the_joints_median_gap():
     around = np.pad(missing | hidden, ((1, 1), (0, 0)), constant_values=True)
     assert not around[runs.start, runs.joint].any()          # observed just before each run
     assert not around[runs.stop + 1, runs.joint].any()       # and just after it
+
+
+def _refine_bone_by_bone(uv, missing, skeleton, bounds):
+    """The refinement's definition: each bone in joint order, pulling its filled end."""
+    refined = uv.copy()
+    for b, (parent, child) in enumerate(skeleton.bones):
+        for t in np.flatnonzero(missing[:, child] | missing[:, parent]):
+            bone = refined[t, child] - refined[t, parent]
+            length = np.hypot(*bone)
+            if length > bounds[t, b]:
+                bone = bone * bounds[t, b] / length
+                if missing[t, child]:
+                    refined[t, child] = refined[t, parent] + bone
+                else:
+                    refined[t, parent] = refined[t, child] - bone
+    return refined
+
+
+@pytest.mark.parametrize("name", ["mediapipe21", "thesis21", "dhg22"])
+def test_refinement_by_rounds_equals_bone_by_bone(name):
+    skeleton = load_skeleton(name)
+    rng = np.random.default_rng(7)
+    uv = rng.normal(size=(60, skeleton.n_joints, 2)) * 40
+    missing = rng.random((60, skeleton.n_joints)) < 0.3
+    missing[::3, skeleton.root] = True
+    uv[::3, skeleton.root] += 500.0                         # filled far off: every bone pulls
+    bounds = bone_bounds(uv, missing, skeleton)
+    expected = _refine_bone_by_bone(uv, missing, skeleton, bounds)
+    assert np.allclose(refine_bone_lengths(uv, missing, skeleton), expected, atol=1e-9)
