@@ -6,7 +6,7 @@ is (the wrist, the index and little MCP joints and the joint each finger hangs f
 per finger state, the three bone vectors below the palm. Orthographically a bone's vector
 depends on its own sign only, ``(dx, dy, ±|dZ|)``; through a pinhole it depends on every
 sign above it, since the parent's depth decides where along its ray the child can lie.
-Sign axes are ordered like :data:`handdb.lifting.kinematic.SIGN_STATES`: index 0 is the
+Sign axes are ordered like :data:`handdb.lifting.hand_prior.SIGN_STATES`: index 0 is the
 positive (deeper) choice.
 """
 
