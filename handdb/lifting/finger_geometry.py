@@ -1,6 +1,6 @@
 """Candidate 3D bones of every finger sign state, seen orthographically or through a pinhole.
 
-The hand prior (:mod:`handdb.lifting.kinematic`) scores each finger's eight sign states
+The hand prior (:mod:`handdb.lifting.hand_prior`) scores each finger's eight sign states
 under each of the palm's two tilt states. What it needs is, per palm state, where the palm
 is (the wrist, the index and little MCP joints and the joint each finger hangs from) and,
 per finger state, the three bone vectors below the palm. Orthographically a bone's vector
