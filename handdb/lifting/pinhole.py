@@ -188,24 +188,28 @@ def _deepest_feasible(rays, root, children, first_child, bone_lengths, log_guess
         frame = rays[t]
         deepest = 0
         for g in range(len(steps) - 1, -1, -1):
-            scale = math.exp(log_guess[t] + steps[g])
-            if _least_excess(frame, root, frame[root, 0] * scale, frame[root, 1] * scale,
-                             scale, children, first_child, bone_lengths,
-                             tolerance) <= tolerance:
+            if _fits(frame, root, log_guess[t] + steps[g], children, first_child,
+                     bone_lengths, tolerance):
                 deepest = g
                 break
         low = log_guess[t] + steps[deepest]
         high = low + (steps[1] - steps[0])
         for _ in range(BISECTION_STEPS):
             middle = 0.5 * (low + high)
-            scale = math.exp(middle)
-            if _least_excess(frame, root, frame[root, 0] * scale, frame[root, 1] * scale,
-                             scale, children, first_child, bone_lengths,
-                             tolerance) <= tolerance:
+            if _fits(frame, root, middle, children, first_child, bone_lengths, tolerance):
                 low = middle
             else:
                 high = middle
         depth[t] = math.exp(low)
+
+
+@kernel
+def _fits(rays, root, log_depth, children, first_child, bone_lengths, tolerance):
+    """Whether one frame's pose can hang from the root at depth ``exp(log_depth)``."""
+    root_depth = math.exp(log_depth)
+    return _least_excess(rays, root, rays[root, 0] * root_depth, rays[root, 1] * root_depth,
+                         root_depth, children, first_child, bone_lengths,
+                         tolerance) <= tolerance
 
 
 @kernel
