@@ -11,6 +11,7 @@ Inputs the library refuses (bad files, no bone lengths) travel down the chain as
 
 from __future__ import annotations
 
+import contextlib
 import json
 import re
 import time
@@ -28,6 +29,7 @@ from prefect.futures import PrefectFuture, wait
 from prefect.task_runners import ThreadPoolTaskRunner
 from threadpoolctl import threadpool_limits
 
+from flows.settings import shared_api
 from handdb import __version__, pipeline, progress, tables
 from handdb.quarantine import Refusal, quarantine_table
 from handdb.ratios import ratios_markdown
@@ -203,11 +205,17 @@ def run(inbox: str, db: str, *, gap_fill: str | None = None, lift: str | None = 
         export_usd: bool = True, compare: tuple[str, ...] = (),
         workers: int = DEFAULT_WORKERS, runner: str = "thread",
         dask_address: str | None = None) -> BuildSummary:
-    """Run :func:`build` on the chosen task runner."""
+    """Run :func:`build` on the chosen task runner.
+
+    Dask runs tasks in worker processes, which report to this process's Prefect API
+    (:func:`~flows.settings.shared_api`).
+    """
     flow_ = build.with_options(task_runner=task_runner(runner, workers, dask_address))
-    return flow_(inbox=inbox, db=db, gap_fill=gap_fill, lift=lift, export_usd=export_usd,
-                 compare=list(compare),
-                 window=workers * WINDOW_PER_WORKER)
+    api = shared_api() if runner == "dask" else contextlib.nullcontext()
+    with api:
+        return flow_(inbox=inbox, db=db, gap_fill=gap_fill, lift=lift, export_usd=export_usd,
+                     compare=list(compare),
+                     window=workers * WINDOW_PER_WORKER)
 
 
 @flow(name="handdb-build", log_prints=False,
