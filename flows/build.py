@@ -19,14 +19,14 @@ import uuid
 from dataclasses import asdict, dataclass, field
 from datetime import UTC, datetime
 from pathlib import Path
-from typing import Any
+from typing import Any, cast
 
 import pyarrow as pa
 from prefect import flow, get_run_logger, task
 from prefect.artifacts import create_markdown_artifact
 from prefect.cache_policies import NO_CACHE
 from prefect.futures import PrefectFuture, wait
-from prefect.task_runners import ThreadPoolTaskRunner
+from prefect.task_runners import TaskRunner, ThreadPoolTaskRunner
 from threadpoolctl import threadpool_limits
 
 from flows.settings import shared_api
@@ -57,7 +57,8 @@ def _retry_on_io(task: Any, task_run: Any, state: Any) -> bool:
     return False
 
 
-IO_RETRIES = {"retries": 2, "retry_delay_seconds": 1, "retry_condition_fn": _retry_on_io}
+IO_RETRIES: dict[str, Any] = {"retries": 2, "retry_delay_seconds": 1,
+                             "retry_condition_fn": _retry_on_io}
 
 
 @dataclass
@@ -163,7 +164,9 @@ def _run_clip_chain(entry: Any, key: str, db: str, inbox: str, ratios: pa.Table,
                     options: pipeline.BuildOptions) -> dict[str, PrefectFuture]:
     """Submit one clip's stages; return their futures by stage name, in order (commit last)."""
     clip_id = entry.clip_id
-    chain = {"ingest": ingest.submit(entry, clip_id, key)}
+    # Any: each stage takes the previous stage's future, which Prefect resolves before the
+    # task runs, but Task.submit's types admit only the resolved value.
+    chain: dict[str, Any] = {"ingest": ingest.submit(entry, clip_id, key)}
     chain["bone-lengths"] = bone_lengths.submit(chain["ingest"], clip_id, ratios)
     chain["gap-fill"] = gap_fill.submit(chain["bone-lengths"], clip_id, options)
     chain["lift"] = lift.submit(chain["gap-fill"], clip_id, options)
@@ -219,7 +222,8 @@ def run(inbox: str, db: str, *, gap_fill: str | None = None, lift: str | None = 
 
 
 @flow(name="handdb-build", log_prints=False,
-      task_runner=ThreadPoolTaskRunner(max_workers=DEFAULT_WORKERS))
+      task_runner=cast(TaskRunner[PrefectFuture[Any]],
+                       ThreadPoolTaskRunner(max_workers=DEFAULT_WORKERS)))
 def build(
     inbox: str,
     db: str,
@@ -271,12 +275,13 @@ def build(
             for clip_id, chain in chains.items():
                 wait(list(chain.values()))
                 failure = _chain_failure(chain)
-                outcome = None if failure else chain["commit"].result()
                 if failure:
                     summary.failed[clip_id] = failure
                     progress.advance(clip_id, "failed")
                     logger.error("clip %s failed: %s", clip_id, failure)
-                elif isinstance(outcome, Refusal):
+                    continue
+                outcome = chain["commit"].result()
+                if isinstance(outcome, Refusal):
                     summary.refusals.append(outcome)
                     progress.advance(clip_id, "refused")
                     logger.warning("clip %s refused: %s", clip_id, outcome)

@@ -11,12 +11,14 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass, field
+from typing import Any, cast
 
 import pyarrow as pa
 from prefect import flow, task
 from prefect.artifacts import create_markdown_artifact
 from prefect.cache_policies import NO_CACHE
-from prefect.task_runners import ThreadPoolTaskRunner
+from prefect.futures import PrefectFuture
+from prefect.task_runners import TaskRunner, ThreadPoolTaskRunner
 from threadpoolctl import threadpool_limits
 
 from flows.build import BLAS_THREADS, DEFAULT_WORKERS
@@ -52,7 +54,8 @@ def evaluate_source(
 
 
 @flow(name="handdb-gapfill-eval", log_prints=False, validate_parameters=False,
-      task_runner=ThreadPoolTaskRunner(max_workers=DEFAULT_WORKERS))
+      task_runner=cast(TaskRunner[PrefectFuture[Any]],
+                       ThreadPoolTaskRunner(max_workers=DEFAULT_WORKERS)))
 def gapfill_eval(
     sources: list[ClipSource], db: str, masks: list[str], methods: list[str], seed: int = 0
 ) -> EvalSummary:

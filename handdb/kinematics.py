@@ -204,7 +204,7 @@ def build_hand_model(hand: str = "right", bone_lengths: dict[str, float] | None 
     n = skeleton.n_joints
     directions = np.zeros((n, 3))
     alignments = np.tile(np.eye(3), (n, 1, 1))
-    template = {name: np.linalg.norm(offset) for name, offset in PALM_TEMPLATE_MM.items()}
+    template = {name: float(np.linalg.norm(offset)) for name, offset in PALM_TEMPLATE_MM.items()}
     template.update(FINGER_TEMPLATE_MM)
     for j, name in enumerate(skeleton.joints):
         if name in PALM_TEMPLATE_MM:

@@ -131,7 +131,7 @@ def fit_markers(markers: np.ndarray, *, hand: str = "right", units: str = "mm",
     """
     mm_per_unit = METERS_PER_UNIT[units] * 1000.0
     mm = np.asarray(markers, dtype=np.float64) * mm_per_unit
-    visible = np.isfinite(mm).all(axis=-1)
+    visible = np.asarray(np.isfinite(mm).all(axis=-1), dtype=bool)
     if bone_lengths:
         model = build_hand_model(hand, {k: v * mm_per_unit for k, v in bone_lengths.items()})
         calibration = None

@@ -353,7 +353,7 @@ def joints_3d_table(result: ClipResult) -> pa.Table:
     uv = result.uv.reshape(n, 2)
     if result.fill is not None:
         filled = result.fill.filled.reshape(n)
-        fill_method = np.where(filled, result.fill.fill_method.reshape(n), None)
+        fill_method = np.where(filled, result.fill.fill_method.reshape(n), np.array(None))
     else:
         filled, fill_method = np.zeros(n, dtype=bool), np.full(n, None)
     xyz = lifted.xyz.reshape(n, 3) if lifted is not None else np.full((n, 3), np.nan)
@@ -372,7 +372,8 @@ def joints_3d_table(result: ClipResult) -> pa.Table:
         "x": xyz[:, 0],
         "y": xyz[:, 1],
         "z": xyz[:, 2],
-        "lift_method": np.where(lifted_rows, lifted.method if lifted else None, None),
+        "lift_method": (np.where(lifted_rows, lifted.method, np.array(None)) if lifted is not None
+                        else np.full(n, None)),
         "scale": (np.repeat(lifted.scale, n_joints) if lifted is not None
                   else np.full(n, np.nan)),
         "sign_confidence": _flat(lifted.sign_confidence if lifted else None, n),

@@ -81,7 +81,7 @@ def _sheet(n_columns: int) -> tuple[Figure, list[Axes]]:
 
 def _scale_ticks(low: float, high: float) -> np.ndarray:
     """Round tick values inside ``[low, high]``, ``(n,) float64``."""
-    values = MaxNLocator(_TICKS_PER_AXIS).tick_values(low, high)
+    values = np.asarray(MaxNLocator(_TICKS_PER_AXIS).tick_values(low, high))
     return values[(values >= low) & (values <= high)]
 
 

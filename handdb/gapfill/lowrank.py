@@ -41,7 +41,7 @@ MIN_SPREAD = 1e-9
 
 def _component_count(eigenvalues: np.ndarray, variance: float, limit: int) -> int:
     share = np.cumsum(eigenvalues) / max(eigenvalues.sum(), MIN_SPREAD)
-    return int(min(np.searchsorted(share, variance) + 1, limit))
+    return min(int(np.searchsorted(share, variance)) + 1, limit)
 
 
 def lowrank_reconstruct(

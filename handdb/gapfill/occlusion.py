@@ -24,7 +24,7 @@ def _own_parts(skeleton: Skeleton) -> np.ndarray:
     child = np.flatnonzero(skeleton.parents >= 0)
     own[skeleton.parents[child], child] = True
     palm = np.append(skeleton.root, skeleton.children(skeleton.root))
-    own[np.ix_(palm, [skeleton.root])] = True
+    own[palm, skeleton.root] = True
     return own
 
 

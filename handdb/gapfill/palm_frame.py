@@ -89,7 +89,7 @@ def palm_motion(uv: np.ndarray, missing: np.ndarray, skeleton: Skeleton) -> Palm
         return None
     palm_index = np.flatnonzero(palm)
     points, seen = np.take(uv, palm_index, axis=1), np.take(palm_seen, palm_index, axis=1)
-    complete = seen.all(axis=1)
+    complete = np.asarray(seen.all(axis=1), dtype=bool)
     # The reference is shaped by the frames showing the whole palm (else by every frame
     # whose fit is affine): only those are fitted while shaping it.
     shape_from = np.flatnonzero(complete) if complete.any() else np.arange(len(uv))

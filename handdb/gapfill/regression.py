@@ -138,7 +138,7 @@ def regression_samples(uv: np.ndarray, missing: np.ndarray, columns: np.ndarray)
     values[:-1, -1] = 1.0
     low = np.min(values[:-1, :-1], axis=0, where=seen_coordinates, initial=np.inf) + centre
     high = np.max(values[:-1, :-1], axis=0, where=seen_coordinates, initial=-np.inf) + centre
-    complete = seen.all(axis=1)
+    complete = np.asarray(seen.all(axis=1), dtype=bool)
     return Samples(columns, centre, values, seen, complete,
                    _block_moments(values, complete), low, high)
 
@@ -341,8 +341,9 @@ def regression_estimates(
         return [np.empty((0, 2)) for _ in problems]
     columns = samples.columns
     n_frames = samples.values.shape[0] - 1
-    gaps = Gaps(*(np.concatenate([getattr(part, name) for _, part in problems])
-                  for name in ("joint", "start", "stop")), n_frames)
+    joints, starts, stops = (np.concatenate([getattr(part, name) for _, part in problems])
+                             for name in ("joint", "start", "stop"))
+    gaps = Gaps(joints, starts, stops, n_frames)
     problem = np.repeat(np.arange(len(problems)), [len(part) for _, part in problems])
     missing_bits = np.empty((len(problems), n_frames), dtype=np.int64)
     low = np.empty((len(problems), 2 * columns.size))

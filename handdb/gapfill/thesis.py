@@ -145,7 +145,7 @@ def extrapolate(
     """
     track = uv.copy()
     fallbacks = {n: np.zeros_like(missing) for n in range(1, history)}
-    for t in np.flatnonzero(missing[1:].any(axis=1)) + 1:
+    for t in map(int, np.flatnonzero(missing[1:].any(axis=1)) + 1):
         joints = np.flatnonzero(missing[t])
         if t < history:
             track[t, joints] = RULE_BY_HISTORY[t](track, t, joints, dependency[joints])
