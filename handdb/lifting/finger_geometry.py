@@ -3,9 +3,11 @@
 The hand prior (:mod:`handdb.lifting.hand_prior`) scores each finger's eight sign states
 under each of the palm's two tilt states. What it needs is, per palm state, where the palm
 is (the wrist, the index and little MCP joints and the joint each finger hangs from) and,
-per finger state, the three bone vectors below the palm. Orthographically a bone's vector
-depends on its own sign only, ``(dx, dy, ±|dZ|)``; through a pinhole it depends on every
-sign above it, since the parent's depth decides where along its ray the child can lie.
+per finger state, the three bone vectors below the palm. Through a pinhole a bone's vector
+depends on every sign above it, since the parent's depth decides where along its ray the
+child can lie. Orthographically it depends on its own sign only, ``(dx, dy, ±|dZ|)``, and
+palm state 1 is state 0's mirror image, so no candidates are built there:
+:func:`handdb.lifting.hand_prior.score_mirrored_fingers` takes them from the image.
 Sign axes are ordered like :data:`handdb.lifting.hand_prior.SIGN_STATES`: index 0 is the
 positive (deeper) choice.
 """
@@ -18,7 +20,6 @@ import numpy as np
 
 from handdb.lifting.hand_layout import HandLayout
 from handdb.lifting.pinhole import ray_roots
-from handdb.skeletons import Skeleton
 
 
 @dataclass(frozen=True)
@@ -36,9 +37,10 @@ class FingerCandidates:
         3 (axes 3, 4, 5).
     joints
         Three arrays ``(T, 2, F, 2, 3)``, ``(T, 2, F, 2, 2, 3)``, ``(T, 2, F, 2, 2, 2, 3)``:
-        where the chain joints lie (pinhole only; ``None`` orthographically).
+        where the chain joints lie (``None`` when not known).
     palm
-        ``(T, 2, J, 3) float64``: every joint of the palm in each palm state (pinhole only).
+        ``(T, 2, J, 3) float64``: every joint of the palm in each palm state (``None`` when
+        not known).
     """
 
     anchors: np.ndarray
@@ -51,45 +53,6 @@ def anchor_joints(layout: HandLayout) -> np.ndarray:
     """Joints of :attr:`FingerCandidates.anchors`, ``(3 + F,) int64``."""
     return np.concatenate([[layout.wrist, layout.index_mcp, layout.little_mcp],
                            layout.chain_bases])
-
-
-def orthographic_candidates(xy: np.ndarray, abs_dz: np.ndarray, palm_z: np.ndarray,
-                            skeleton: Skeleton, layout: HandLayout) -> FingerCandidates:
-    """Candidates under scaled orthographic projection.
-
-    Parameters
-    ----------
-    xy
-        ``(T, J, 2) float64``, clip units, image-plane positions.
-    abs_dz
-        ``(T, J) float64``, clip units, unsigned bone depths.
-    palm_z
-        ``(T, 2, J) float64``: depth of the palm joints relative to the root in palm state
-        0 and 1 (other joints: ignored).
-    skeleton, layout
-        The clip's skeleton, its palm and fingers.
-    """
-    # Built component by component, each a contiguous fill, and then viewed with the
-    # components last: numpy fills an array with a small last axis slowly.
-    anchors = anchor_joints(layout)
-    chains = layout.chains
-    x, y = xy[..., 0], xy[..., 1]
-    points = np.empty((3,) + palm_z.shape[:2] + (len(anchors),))        # (3, T, 2, A)
-    points[0] = x[:, None, anchors]
-    points[1] = y[:, None, anchors]
-    points[2] = palm_z[:, :, anchors]
-    parents = skeleton.parents[chains]
-    vectors = np.empty((3, 2, len(xy), 1) + chains.shape)                # (3, 2, T, 1, F, 3)
-    vectors[0] = (x[:, chains] - x[:, parents])[:, None]
-    vectors[1] = (y[:, chains] - y[:, parents])[:, None]
-    vectors[2, 0] = abs_dz[:, None, chains]
-    vectors[2, 1] = -vectors[2, 0]
-    points = np.moveaxis(points, 0, -1)
-    vectors = vectors.transpose(2, 3, 4, 5, 1, 0)                        # (T, 1, F, 3, 2, 3)
-    bones = (vectors[:, :, :, 0][..., :, None, None, :],
-             vectors[:, :, :, 1][..., None, :, None, :],
-             vectors[:, :, :, 2][..., None, None, :, :])
-    return FingerCandidates(anchors=points, bones=bones)
 
 
 def perspective_candidates(rays: np.ndarray, palm_xyz: np.ndarray, bone_lengths: np.ndarray,

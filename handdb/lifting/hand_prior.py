@@ -12,6 +12,16 @@ The scoring runs in two compiled kernels (:mod:`handdb.lifting.compiled`) over f
 palm states, fingers and sign states, with no temporary arrays: the first puts every
 candidate bone in its finger's frame, numpy takes the arctangents (vectorised, several
 times faster than one at a time), the second scores the states and sums them up.
+
+Orthographically (:func:`score_mirrored_fingers`) the first kernel builds the candidate
+bones ``(dx, dy, ±|dZ|)`` from the image itself and works out palm state 0 only: state 1
+is its mirror image (``z → −z``), and a mirror, being improper, turns the palm's normal
+``n`` into ``−M n`` (``M = diag(1, 1, −1)``) and its forward axis ``f`` into ``M f``. A
+candidate bone ``v`` of state 1 therefore rises ``v·(−M n) = −(M v)·n`` toward the palmar
+side and runs ``v·M f = (M v)·f`` ahead, where ``M v`` is the candidate with every sign
+flipped: state 1's components, base heights and angles are state 0's of the
+complementary candidate, negated where they cross the palm plane. Negation is exact in
+floating point, so the derived half equals what computing it would give, bit for bit.
 """
 
 from __future__ import annotations
@@ -23,7 +33,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from handdb.lifting.compiled import kernel
-from handdb.lifting.finger_geometry import FingerCandidates
+from handdb.lifting.finger_geometry import FingerCandidates, anchor_joints
 from handdb.lifting.hand_layout import CHAIN_BONES, HandLayout
 from handdb.lifting.temporal import NEGLIGIBLE_NATS
 
@@ -118,23 +128,74 @@ def score_fingers(candidates: FingerCandidates, bone_lengths: np.ndarray,
     first = np.broadcast_to(candidates.bones[0], full)[:, :, :, :, 0, 0]
     second = np.broadcast_to(candidates.bones[1], full)[:, :, :, :, :, 0]
     third = np.broadcast_to(candidates.bones[2], full)
-    thumb = layout.is_thumb
-    ranges = np.radians(np.where(thumb[:, None, None], THUMB_RANGE_DEG,
-                                 LONG_FINGER_RANGE_DEG))                 # (F, 3, 2)
-    first_bone = bone_lengths[layout.chains[:, 0]]
-    margin = np.where(thumb, THUMB_DORSAL_MARGIN, FINGER_DORSAL_MARGIN) * first_bone
     palmar = np.empty((n_frames, 2, n_fingers, CANDIDATE_BONES))
     ahead = np.empty(palmar.shape)
     base_height = np.empty((n_frames, 2, n_fingers))
     _palm_frame_components(anchors, first, second, third, HANDEDNESS[hand], palmar, ahead,
                            base_height)
+    return _score(np.arctan2(palmar, ahead), palmar, base_height, bone_lengths, layout)
+
+
+def score_mirrored_fingers(xy: np.ndarray, abs_dz: np.ndarray, palm_z: np.ndarray,
+                           bone_lengths: np.ndarray, layout: HandLayout,
+                           hand: str) -> FingerScores:
+    """Score the sign states orthographically, palm state 1 being state 0's mirror image.
+
+    Gives what :func:`score_fingers` gives for the candidates whose anchors have the palm
+    depths ``palm_z`` in state 0 and ``−palm_z`` in state 1 and whose bones are
+    ``(dx, dy, ±|dZ|)``, bit for bit, at half the geometry (see the module docstring).
+
+    Parameters
+    ----------
+    xy
+        ``(T, J, 2) float64``, clip units, image-plane positions.
+    abs_dz
+        ``(T, J) float64``, clip units, unsigned bone depths.
+    palm_z
+        ``(T, J) float64``, clip units: depth of the palm joints relative to the root in
+        palm state 0 (other joints: ignored).
+    bone_lengths
+        ``(J,) float64``, clip units.
+    layout, hand
+        The skeleton's palm and fingers, and which hand the clip shows.
+
+    Returns
+    -------
+    FingerScores
+    """
+    n_frames, n_fingers = len(xy), len(layout.fingers)
+    parents = np.column_stack([layout.chain_bases, layout.chains[:, :-1]])
+    palmar = np.empty((n_frames, 2, n_fingers, CANDIDATE_BONES))
+    ahead = np.empty((n_frames, n_fingers, CANDIDATE_BONES))
+    base_height = np.empty((n_frames, 2, n_fingers))
+    _mirrored_components(xy, abs_dz, palm_z, anchor_joints(layout), layout.chains, parents,
+                         HANDEDNESS[hand], palmar, ahead, base_height)
+    angle = np.empty(palmar.shape)
+    np.arctan2(palmar[:, 0], ahead, out=angle[:, 0])
+    _mirror_angles(angle)
+    return _score(angle, palmar, base_height, bone_lengths, layout)
+
+
+def _score(angle: np.ndarray, palmar: np.ndarray, base_height: np.ndarray,
+           bone_lengths: np.ndarray, layout: HandLayout) -> FingerScores:
+    """Score the states from the candidates in their fingers' frames.
+
+    ``angle`` ``(T, 2, F, 14)``, radians, is each candidate bone's direction in its
+    finger's plane; ``palmar`` ``(T, 2, F, 14)`` and ``base_height`` ``(T, 2, F)``, clip
+    units, its rise toward the palmar side and the finger base's height over the palm.
+    """
+    thumb = layout.is_thumb
+    ranges = np.radians(np.where(thumb[:, None, None], THUMB_RANGE_DEG,
+                                 LONG_FINGER_RANGE_DEG))                 # (F, 3, 2)
+    first_bone = bone_lengths[layout.chains[:, 0]]
+    margin = np.where(thumb, THUMB_DORSAL_MARGIN, FINGER_DORSAL_MARGIN) * first_bone
     scores = FingerScores(anatomy=np.empty(base_height.shape + (len(SIGN_STATES),)),
                           evidence=np.empty(base_height.shape),
                           bone_log_odds=np.empty(base_height.shape + (CHAIN_BONES,)),
                           best=np.empty(base_height.shape, dtype=np.int64))
-    _score_states(np.arctan2(palmar, ahead), palmar, base_height, ranges,
-                  np.radians(RANGE_SOFTNESS_DEG), ~thumb, margin, DORSAL_SOFTNESS * first_bone,
-                  scores.anatomy, scores.evidence, scores.bone_log_odds, scores.best)
+    _score_states(angle, palmar, base_height, ranges, np.radians(RANGE_SOFTNESS_DEG), ~thumb,
+                  margin, DORSAL_SOFTNESS * first_bone, scores.anatomy, scores.evidence,
+                  scores.bone_log_odds, scores.best)
     return scores
 
 
@@ -207,6 +268,80 @@ def _palm_frame_components(anchors, first, second, third, handedness, palmar, ah
                         for c in range(2):
                             _project(third[t, p, f, a, b, c], normal, forward,
                                      palmar[t, p, f], ahead[t, p, f], _candidate(a, b, c))
+
+
+@kernel
+def _mirrored_components(xy, abs_dz, palm_z, anchors, chains, parents, handedness, palmar,
+                         ahead, base_height):
+    """Like :func:`_palm_frame_components` for orthographic candidates, from the image.
+
+    ``xy`` is ``(T, J, 2)``, ``abs_dz`` and ``palm_z`` ``(T, J)`` (state 0's palm depths);
+    ``anchors`` ``(3 + F,)`` the joints of
+    :attr:`handdb.lifting.finger_geometry.FingerCandidates.anchors`, ``chains`` and
+    ``parents`` ``(F, 3)`` each finger's bones below the palm. Fills ``palmar`` ``(T, 2, F,
+    14)`` and ``base_height`` ``(T, 2, F)`` for both palm states, state 1 mirrored from
+    state 0, and ``ahead`` ``(T, F, 14)`` for state 0.
+    """
+    n_frames, n_fingers = xy.shape[0], chains.shape[0]
+    corner = np.empty((3, 3))
+    across, along, normal = np.empty(3), np.empty(3), np.empty(3)
+    forward, bone = np.empty(3), np.empty(3)
+    for t in range(n_frames):
+        for i in range(3):
+            corner[i, 0], corner[i, 1] = xy[t, anchors[i], 0], xy[t, anchors[i], 1]
+            corner[i, 2] = palm_z[t, anchors[i]]
+        for k in range(3):
+            across[k] = corner[1, k] - corner[0, k]
+            along[k] = corner[2, k] - corner[0, k]
+        normal[0] = across[1] * along[2] - across[2] * along[1]
+        normal[1] = across[2] * along[0] - across[0] * along[2]
+        normal[2] = across[0] * along[1] - across[1] * along[0]
+        norm = math.sqrt(_dot(normal, normal))
+        for k in range(3):
+            normal[k] *= handedness / norm
+        for f in range(n_fingers):
+            base = anchors[3 + f]
+            forward[0] = xy[t, base, 0] - corner[0, 0]
+            forward[1] = xy[t, base, 1] - corner[0, 1]
+            forward[2] = palm_z[t, base] - corner[0, 2]
+            height = _dot(forward, normal)
+            base_height[t, 0, f], base_height[t, 1, f] = height, -height
+            for k in range(3):
+                forward[k] -= height * normal[k]
+            norm = math.sqrt(_dot(forward, forward))
+            for k in range(3):
+                forward[k] /= norm
+            for i in range(CHAIN_BONES):        # candidates of bone i: 2^(i+1) from 2^(i+1) - 2
+                child, parent = chains[f, i], parents[f, i]
+                bone[0] = xy[t, child, 0] - xy[t, parent, 0]
+                bone[1] = xy[t, child, 1] - xy[t, parent, 1]
+                for sign in range(2):
+                    bone[2] = abs_dz[t, child] if sign == 0 else -abs_dz[t, child]
+                    rise, run = _dot(bone, normal), _dot(bone, forward)
+                    for above in range(1 << i):
+                        index = (1 << (i + 1)) - 2 + 2 * above + sign
+                        palmar[t, 0, f, index], ahead[t, f, index] = rise, run
+                        palmar[t, 1, f, _mirrored(index)] = -rise
+
+
+@kernel
+def _mirror_angles(angle):
+    """Fill palm state 1 of ``angle`` ``(T, 2, F, 14)`` from state 0: ``−`` the mirror's."""
+    n_frames, _, n_fingers, n_candidates = angle.shape
+    for t in range(n_frames):
+        for f in range(n_fingers):
+            for index in range(n_candidates):
+                angle[t, 1, f, _mirrored(index)] = -angle[t, 0, f, index]
+
+
+@kernel
+def _mirrored(index: int) -> int:
+    """Position of the candidate with every sign flipped (:func:`_candidate`'s order)."""
+    if index < 2:
+        return 1 - index
+    if index < 6:
+        return 7 - index
+    return 19 - index
 
 
 @kernel

@@ -43,11 +43,7 @@ from typing import Any
 import numpy as np
 
 from handdb.clip import Camera
-from handdb.lifting.finger_geometry import (
-    FingerCandidates,
-    orthographic_candidates,
-    perspective_candidates,
-)
+from handdb.lifting.finger_geometry import FingerCandidates, perspective_candidates
 from handdb.lifting.geometry import (
     accumulate_depths,
     centred_pixels,
@@ -57,7 +53,7 @@ from handdb.lifting.geometry import (
     projected_lengths,
 )
 from handdb.lifting.hand_layout import HandLayout, hand_layout
-from handdb.lifting.hand_prior import SIGN_STATES, score_fingers
+from handdb.lifting.hand_prior import SIGN_STATES, score_fingers, score_mirrored_fingers
 from handdb.lifting.palm import palm_signs
 from handdb.lifting.pinhole import camera_rays, estimate_root_depth, walk_rays
 from handdb.lifting.registry import register
@@ -99,7 +95,8 @@ class SignSolution:
     finger_signs
         ``(T, F, 3) float64`` of ±1: the signs of each finger's bones below the palm.
     candidates
-        The candidates the signs were chosen from.
+        The candidates the signs were chosen from (pinhole only; ``None``
+        orthographically, where they follow from the image and the depths).
     """
 
     signs: np.ndarray
@@ -107,7 +104,7 @@ class SignSolution:
     mirror_log_odds: float
     palm_state: np.ndarray
     finger_signs: np.ndarray
-    candidates: FingerCandidates
+    candidates: FingerCandidates | None
 
 
 def resolve_signs(
@@ -133,7 +130,7 @@ def resolve_signs(
     candidates_for
         Builds the finger candidates from the palm's sign pattern ``(T, P)`` (state 0;
         state 1 is its mirror). Default: orthographic candidates from ``xy`` and
-        ``abs_dz``.
+        ``abs_dz``, scored by :func:`handdb.lifting.hand_prior.score_mirrored_fingers`.
 
     Returns
     -------
@@ -146,11 +143,11 @@ def resolve_signs(
     palm_dz[:, layout.palm_bones] = palm * abs_dz[:, layout.palm_bones]
     palm_z = accumulate_depths(palm_dz, skeleton)
     if candidates_for is None:
-        candidates = orthographic_candidates(xy, abs_dz, np.stack([palm_z, -palm_z], axis=1),
-                                             skeleton, layout)
+        candidates = None
+        scores = score_mirrored_fingers(xy, abs_dz, palm_z, bone_lengths, layout, hand)
     else:
         candidates = candidates_for(palm)
-    scores = score_fingers(candidates, bone_lengths, layout, hand)
+        scores = score_fingers(candidates, bone_lengths, layout, hand)
     votes = np.clip(scores.evidence[:, 0] - scores.evidence[:, 1], -FINGER_VOTE_CAP,
                     FINGER_VOTE_CAP)                                      # (T, F)
     palm_depths = _palm_depths(candidates, palm_z, skeleton, layout)     # (T, 1, 2, P)
@@ -191,21 +188,21 @@ def resolve_signs(
                         finger_signs=finger_signs, candidates=candidates)
 
 
-def _palm_depths(candidates: FingerCandidates, palm_z: np.ndarray, skeleton: Skeleton,
-                 layout: HandLayout) -> np.ndarray:
+def _palm_depths(candidates: FingerCandidates | None, palm_z: np.ndarray,
+                 skeleton: Skeleton, layout: HandLayout) -> np.ndarray:
     """Depth of the palm's joints relative to the root in each palm state, ``(T, 1, 2, P)``.
 
     Orthographically state 1 is the mirror of state 0 (``palm_z``); through a pinhole the
     candidates' palms are used as they are.
     """
-    if candidates.palm is None:
+    if candidates is None or candidates.palm is None:
         z = palm_z[:, layout.palm_bones]
         return np.stack([z, -z], axis=1)[:, None]
     z = candidates.palm[..., 2]                                          # (T, 2, J)
     return (z[:, :, layout.palm_bones] - z[:, :, skeleton.root, None])[:, None]
 
 
-def _chain_depths(candidates: FingerCandidates, state: np.ndarray, best: np.ndarray,
+def _chain_depths(candidates: FingerCandidates | None, state: np.ndarray, best: np.ndarray,
                   abs_dz: np.ndarray, layout: HandLayout) -> np.ndarray:
     """Depth each finger bone spans under either sign, ``(T, F * 3, 2, 1)``.
 
@@ -214,7 +211,7 @@ def _chain_depths(candidates: FingerCandidates, state: np.ndarray, best: np.ndar
     and the two signs span opposite depths.
     """
     n_frames, n_fingers = best.shape
-    if candidates.joints is None:
+    if candidates is None or candidates.joints is None:
         magnitude = abs_dz[:, layout.chains].reshape(n_frames, -1, 1, 1)
         return np.concatenate([magnitude, -magnitude], axis=2)
     full = (n_frames, 2, n_fingers, 2, 2, 2)
@@ -234,7 +231,7 @@ def _chosen_points(solution: SignSolution, skeleton: Skeleton) -> np.ndarray:
     """Joint positions of a pinhole solution, picked from its candidates, ``(T, J, 3)``."""
     layout = hand_layout(skeleton)
     candidates = solution.candidates
-    if candidates.palm is None or candidates.joints is None:
+    if candidates is None or candidates.palm is None or candidates.joints is None:
         raise ValueError("positions can only be picked from perspective candidates")
     frames = np.arange(len(solution.palm_state))
     xyz = candidates.palm[frames, solution.palm_state].copy()
