@@ -16,6 +16,7 @@ from functools import cache
 
 import numpy as np
 
+from handdb.gapfill.compiled import kernel
 from handdb.gapfill.gaps import Gaps, find_gaps
 from handdb.gapfill.registry import OFFLINE, MethodOutput, register
 from handdb.gapfill.rest_pose import rest_pose_2d
@@ -248,8 +249,7 @@ def carry_along_chains_many(
 ) -> list[np.ndarray]:
     """:func:`carry_along_chains` for several ``(missing, gaps)`` problems on one clip.
 
-    Each problem fills its own copy of ``uv``; the fits of each depth are batched across
-    the problems.
+    Each problem fills its own copy of ``uv`` (:func:`_carry_chains`, compiled).
 
     Returns
     -------
@@ -258,19 +258,154 @@ def carry_along_chains_many(
     """
     carriers = parent_bones(skeleton)
     depth = skeleton.depth()
-    filled = [uv.copy() for _ in problems]
-    unresolved = []
-    for missing, gaps in problems:
-        _, frame, joint = gaps.frames()
-        unresolved.append(np.zeros_like(missing))
-        unresolved[-1][frame, joint] = True
-    for level in np.unique(np.concatenate([depth[gaps.joint] for _, gaps in problems])):
-        at_level = [gaps.select(depth[gaps.joint] == level) for _, gaps in problems]
-        carried = _carried(list(zip(filled, unresolved, at_level, strict=True)), carriers,
-                           affine=False)
-        for state, still, gaps, points in zip(filled, unresolved, at_level, carried,
-                                              strict=True):
-            _, frame, joint = gaps.frames()
-            state[frame, joint] = points
-            still[frame, joint] = False
+    filled = []
+    for _, gaps in problems:
+        filled.append(uv.copy())
+        _carry_chains(filled[-1], gaps.joint, gaps.start, gaps.stop, depth[gaps.joint],
+                      carriers)
     return filled
+
+
+@kernel
+def _carry_chains(
+    state: np.ndarray, joint: np.ndarray, start: np.ndarray, stop: np.ndarray,
+    depth: np.ndarray, carriers: np.ndarray,
+) -> None:
+    """Fill gaps in place, a depth at a time, carrying each point with its carriers.
+
+    Parameters
+    ----------
+    state
+        ``(T, J, 2) float64``, pixels: the tracks, every point outside the gaps filled;
+        the gaps' points are written.
+    joint, start, stop
+        ``(G,) int64``: the gaps (as :class:`~handdb.gapfill.gaps.Gaps`), none whole-clip.
+    depth
+        ``(G,) int64``: the depth of each gap's joint; shallower gaps are filled first.
+    carriers
+        ``(J, J) bool``: row ``j``, the joints that carry joint ``j`` (:func:`parent_bones`).
+
+    Notes
+    -----
+    Each point is carried from the frame before its gap and from the frame after it by
+    the similarity fitted to its carriers seen (not in a gap still to fill) in both frames
+    (:func:`_carry_point`), and the two are blended linearly across the gap; a leading
+    gap takes the estimate from after it, a trailing gap the one from before it.
+    """
+    n_frames = state.shape[0]
+    unresolved = np.zeros(state.shape[:2], dtype=np.bool_)
+    for g in range(joint.size):
+        unresolved[start[g]:stop[g], joint[g]] = True
+    order = np.argsort(depth, kind="mergesort")
+    carried = np.empty((n_frames, 2))
+    first = 0
+    while first < order.size:
+        last = first
+        while last < order.size and depth[order[last]] == depth[order[first]]:
+            last += 1
+        level = order[first:last]
+        longest = 0
+        for g in level:
+            longest = max(longest, stop[g] - start[g])
+        values = np.empty((level.size, longest, 2))
+        for index, g in enumerate(level):
+            before, after = max(start[g] - 1, 0), min(stop[g], n_frames - 1)
+            for frame in range(start[g], stop[g]):
+                x0, y0 = _carry_point(state, unresolved, carriers[joint[g]], joint[g],
+                                      before, frame)
+                x1, y1 = _carry_point(state, unresolved, carriers[joint[g]], joint[g],
+                                      after, frame)
+                share = (frame - before) / max(after - before, 1)
+                if start[g] == 0:
+                    carried[frame] = x1, y1
+                elif stop[g] == n_frames:
+                    carried[frame] = x0, y0
+                else:
+                    carried[frame] = ((1 - share) * x0 + share * x1,
+                                      (1 - share) * y0 + share * y1)
+            values[index, :stop[g] - start[g]] = carried[start[g]:stop[g]]
+        for index, g in enumerate(level):
+            state[start[g]:stop[g], joint[g]] = values[index, :stop[g] - start[g]]
+            unresolved[start[g]:stop[g], joint[g]] = False
+        first = last
+
+
+@kernel
+def _carry_point(
+    state: np.ndarray, unresolved: np.ndarray, carrier: np.ndarray, joint: int,
+    reference: int, now: int,
+) -> tuple[float, float]:
+    """Carry a joint's point from frame ``reference`` to frame ``now`` with its carriers.
+
+    The similarity (rotation, scale, translation) from the carriers' points at
+    ``reference`` to those at ``now`` is fitted by least squares over the carriers
+    resolved in both frames (:func:`~handdb.gapfill.transfer.fit_maps` with
+    ``affine=False``, to rounding) and applied to the joint's point at ``reference``.
+
+    Parameters
+    ----------
+    state
+        ``(T, J, 2) float64``, pixels.
+    unresolved
+        ``(T, J) bool``: points not filled yet, never carriers.
+    carrier
+        ``(J,) bool``: the joints that carry ``joint``.
+    joint, reference, now
+        The joint and the two frames.
+
+    Returns
+    -------
+    x, y
+        The carried point, pixels; the point at ``reference`` if no carrier is resolved in
+        both frames.
+    """
+    count = 0
+    source_x = source_y = target_x = target_y = 0.0
+    for k in range(carrier.size):
+        if _carries(unresolved, carrier, joint, k, reference, now):
+            count += 1
+            source_x += _finite_or_zero(state[reference, k, 0])
+            source_y += _finite_or_zero(state[reference, k, 1])
+            target_x += _finite_or_zero(state[now, k, 0])
+            target_y += _finite_or_zero(state[now, k, 1])
+    query_x, query_y = state[reference, joint, 0], state[reference, joint, 1]
+    if count == 0:
+        return query_x, query_y
+    source_x, source_y = source_x / count, source_y / count
+    target_x, target_y = target_x / count, target_y / count
+    sxx = syy = cxx = cxy = cyx = cyy = 0.0
+    for k in range(carrier.size):
+        if _carries(unresolved, carrier, joint, k, reference, now):
+            sx = _finite_or_zero(state[reference, k, 0]) - source_x
+            sy = _finite_or_zero(state[reference, k, 1]) - source_y
+            dx = _finite_or_zero(state[now, k, 0]) - target_x
+            dy = _finite_or_zero(state[now, k, 1]) - target_y
+            sxx += sx * sx
+            syy += sy * sy
+            cxx += dx * sx
+            cxy += dx * sy
+            cyx += dy * sx
+            cyy += dy * sy
+    spread = sxx + syy
+    real, imaginary = 1.0, 0.0
+    if count >= 2 and spread > 0:
+        real, imaginary = (cxx + cyy) / spread, (cyx - cxy) / spread
+    offset_x = target_x - real * source_x - (-imaginary) * source_y
+    offset_y = target_y - imaginary * source_x - real * source_y
+    return (real * query_x + (-imaginary) * query_y + offset_x,
+            imaginary * query_x + real * query_y + offset_y)
+
+
+@kernel
+def _carries(
+    unresolved: np.ndarray, carrier: np.ndarray, joint: int, k: int, reference: int, now: int
+) -> bool:
+    """Joint ``k`` carries ``joint`` between the two frames: a carrier resolved in both."""
+    return (carrier[k] and k != joint and not unresolved[reference, k]
+            and not unresolved[now, k])
+
+
+@kernel
+def _finite_or_zero(value: float) -> float:
+    """``value``, or 0 where it is NaN (a NaN carrier coordinate counts as 0)."""
+    return 0.0 if np.isnan(value) else value
