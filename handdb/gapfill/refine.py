@@ -14,7 +14,7 @@ from functools import cache
 
 import numpy as np
 
-from handdb.gapfill.gaps import mask_points
+from handdb.gapfill.compiled import kernel
 from handdb.skeletons import Skeleton
 
 #: Slack on the longest projected length a bone was observed with, as a factor.
@@ -93,31 +93,61 @@ def refine_bone_lengths(
     """
     bounds = bone_bounds(uv, missing, skeleton, bone_lengths=bone_lengths, scale=scale)
     refined = uv.copy()
-    for bones in _bone_rounds(tuple(skeleton.parents)):
-        parent, child = skeleton.bones[bones].T
-        frame, which = mask_points(np.take(missing, child, axis=1)
-                                   | np.take(missing, parent, axis=1))
-        parent, child = parent[which], child[which]
-        bone = refined[frame, child] - refined[frame, parent]
-        length = np.sqrt(bone[:, 0] ** 2 + bone[:, 1] ** 2)
-        bound = bounds[frame, bones[which]]
-        too_long = length > bound
-        frame, parent, child = frame[too_long], parent[too_long], child[too_long]
-        bone = bone[too_long] * (bound[too_long] / length[too_long])[:, None]
-        moves_child = missing[frame, child]
-        moved, kept = np.flatnonzero(moves_child), np.flatnonzero(~moves_child)
-        refined[frame[moved], child[moved]] = refined[frame[moved], parent[moved]] + bone[moved]
-        refined[frame[kept], parent[kept]] = refined[frame[kept], child[kept]] - bone[kept]
+    order = np.concatenate(_bone_rounds(tuple(skeleton.parents)))
+    parent, child = skeleton.bones.T
+    _pull_bones(refined, missing, parent[order], child[order], np.take(bounds, order, axis=1))
     return refined
+
+
+@kernel
+def _pull_bones(
+    uv: np.ndarray, missing: np.ndarray, parent: np.ndarray, child: np.ndarray,
+    bounds: np.ndarray,
+) -> None:
+    """Pull the filled end of each bone onto its bound, bone after bone, in place.
+
+    Parameters
+    ----------
+    uv
+        ``(T, J, 2) float64``, pixels; modified.
+    missing
+        ``(T, J) bool``: the points that may move.
+    parent, child
+        ``(B,) int64``: the bones' joints, in the order to visit them.
+    bounds
+        ``(T, B) float64``, pixels: the longest each bone may be in each frame.
+
+    Notes
+    -----
+    Where a bone with a missing end is longer than its bound, the child is moved along
+    the bone onto the bound if it is missing, else the parent.
+    """
+    for b in range(parent.size):
+        p, c = parent[b], child[b]
+        for frame in range(uv.shape[0]):
+            if not (missing[frame, c] or missing[frame, p]):
+                continue
+            bone_x = uv[frame, c, 0] - uv[frame, p, 0]
+            bone_y = uv[frame, c, 1] - uv[frame, p, 1]
+            length = np.sqrt(bone_x * bone_x + bone_y * bone_y)
+            if length > bounds[frame, b]:
+                ratio = bounds[frame, b] / length
+                bone_x, bone_y = bone_x * ratio, bone_y * ratio
+                if missing[frame, c]:
+                    uv[frame, c, 0] = uv[frame, p, 0] + bone_x
+                    uv[frame, c, 1] = uv[frame, p, 1] + bone_y
+                else:
+                    uv[frame, p, 0] = uv[frame, c, 0] - bone_x
+                    uv[frame, p, 1] = uv[frame, c, 1] - bone_y
 
 
 @cache
 def _bone_rounds(parents: tuple[int, ...]) -> tuple[np.ndarray, ...]:
-    """Bones (indices into ``Skeleton.bones``) that refinement can pull together, in turn.
+    """The order refinement visits the bones in (indices into ``Skeleton.bones``), by rounds.
 
     Bones are visited from the root outward: by depth, and among bones of one parent (which
     may pull that parent) one at a time in joint order. Within a round no two bones share
-    a joint, so the rounds give what visiting the bones one by one in joint order gives.
+    a joint, so the order within a round does not matter.
     """
     parent = np.asarray(parents)
     child = np.flatnonzero(parent >= 0)
