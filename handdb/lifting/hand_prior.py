@@ -411,13 +411,16 @@ def _score_states(angle, palmar, base_height, ranges, range_softness, coupled, m
 @kernel
 def _summarise(log_likelihood, evidence, bone_log_odds, best, t, p, f):
     """Log evidence, per-bone log-odds and the best of a finger's eight states."""
-    top = np.argmax(log_likelihood)
+    top = _argmax(log_likelihood)
     best[t, p, f] = top
     peak = log_likelihood[top]
     total = first = second = third = 0.0
     for state in range(8):
         gap = log_likelihood[state] - peak
-        weight = math.exp(gap) if gap > -NEGLIGIBLE_NATS else 0.0
+        if gap == 0.0:
+            weight = 1.0
+        else:
+            weight = math.exp(gap) if gap > -NEGLIGIBLE_NATS else 0.0
         total += weight
         first += weight if state < 4 else 0.0
         second += weight if state % 4 < 2 else 0.0
@@ -425,3 +428,19 @@ def _summarise(log_likelihood, evidence, bone_log_odds, best, t, p, f):
     evidence[t, p, f] = peak + math.log(total)
     for bone, positive in enumerate((first, second, third)):
         bone_log_odds[t, p, f, bone] = math.log(positive / (total - positive))
+
+
+@kernel
+def _argmax(values):
+    """``np.argmax`` of a short 1D array, NaN counting as the largest, inline.
+
+    numba's ``np.argmax`` costs about as much as the eight exponentials of
+    :func:`_summarise`.
+    """
+    top = 0
+    for index in range(len(values)):
+        if math.isnan(values[index]):
+            return index
+        if values[index] > values[top]:
+            top = index
+    return top
