@@ -3,14 +3,18 @@
 A bone of length ``l`` whose ends project ``p`` pixels apart at scale ``s`` (pixels per
 clip unit) spans a depth of ``|dZ| = sqrt(l² − (p / s)²)``. The sign of ``dZ`` is the
 reflective ambiguity (§3.6) and is left to the lifting methods. All functions are
-vectorised over frames and never modify their inputs.
+vectorised over frames (the walks over the skeleton compiled,
+:mod:`handdb.lifting.compiled`) and never modify their inputs.
 """
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from handdb.clip import Camera
+from handdb.lifting.compiled import kernel
 from handdb.skeletons import Skeleton
 
 
@@ -24,9 +28,24 @@ def dot3(a: np.ndarray, b: np.ndarray) -> np.ndarray:
 
 
 def projected_lengths(uv: np.ndarray, skeleton: Skeleton) -> np.ndarray:
-    """Image length of the bone ending at each joint, ``(T, J) float64`` pixels (root: 0)."""
-    parents = np.where(skeleton.parents < 0, np.arange(skeleton.n_joints), skeleton.parents)
-    return np.hypot(uv[..., 0] - uv[:, parents, 0], uv[..., 1] - uv[:, parents, 1])
+    """Image length of the bone ending at each joint, ``(T, J) float64`` pixels (root: 0).
+
+    ``uv`` is ``(T, J, 2) float64``, pixels.
+    """
+    lengths = np.empty(uv.shape[:2])
+    _projected_lengths(uv, skeleton.parents, lengths)
+    return lengths
+
+
+@kernel
+def _projected_lengths(uv, parents, lengths):
+    """Fill ``lengths`` ``(T, J)`` with the image length of each joint's bone (root: 0)."""
+    n_frames, n_joints = lengths.shape
+    for t in range(n_frames):
+        for joint in range(n_joints):
+            parent = parents[joint] if parents[joint] >= 0 else joint
+            lengths[t, joint] = math.hypot(uv[t, joint, 0] - uv[t, parent, 0],
+                                           uv[t, joint, 1] - uv[t, parent, 1])
 
 
 def eq6_scale(projected: np.ndarray, bone_lengths: np.ndarray, rank: int = 1) -> np.ndarray:
@@ -121,15 +140,34 @@ def accumulate_depths(signed_dz: np.ndarray, skeleton: Skeleton) -> np.ndarray:
     -------
     numpy.ndarray
         ``(..., J) float64`` depth of every joint relative to the root (root: 0); NaN
-        below a bone whose depth is NaN.
+        below a bone whose depth is NaN. Each joint's depth is the sum of the bones on its
+        path taken in joint order (the order of the matrix product by :func:`path_matrix`).
     """
-    paths = path_matrix(skeleton)
-    missing = np.isnan(signed_dz)
-    missing[..., skeleton.root] = False
-    z = np.where(missing, 0.0, signed_dz)
-    z[..., skeleton.root] = 0.0
-    z = z @ paths.T
-    return np.where(missing.astype(np.float64) @ paths.T > 0, np.nan, z)
+    on_path = path_matrix(skeleton) > 0
+    lengths = on_path.sum(axis=1)
+    paths = np.zeros(on_path.shape, dtype=np.int64)
+    for joint in range(skeleton.n_joints):
+        paths[joint, : lengths[joint]] = np.flatnonzero(on_path[joint])
+    flat = np.reshape(signed_dz, (-1, skeleton.n_joints))
+    z = np.empty(flat.shape)
+    _sum_paths(flat, paths, lengths, z)
+    return z.reshape(np.shape(signed_dz))
+
+
+@kernel
+def _sum_paths(signed_dz, paths, lengths, z):
+    """Fill ``z`` ``(N, J)`` with each joint's sum of ``signed_dz`` ``(N, J)`` over its path.
+
+    Joint ``j``'s path is ``paths[j, :lengths[j]]`` (``paths`` ``(J, J)``, ``lengths``
+    ``(J,)``); a NaN on the path gives NaN.
+    """
+    n_rows, n_joints = z.shape
+    for row in range(n_rows):
+        for joint in range(n_joints):
+            total = 0.0
+            for step in range(lengths[joint]):
+                total += signed_dz[row, paths[joint, step]]
+            z[row, joint] = total
 
 
 def orthographic_points(uv: np.ndarray, scale: np.ndarray, z: np.ndarray) -> np.ndarray:
@@ -150,9 +188,19 @@ def orthographic_points(uv: np.ndarray, scale: np.ndarray, z: np.ndarray) -> np.
         ``(T, J, 3) float64``, clip units.
     """
     xyz = np.empty(z.shape + (3,))
-    xyz[..., :2] = uv / scale[:, None, None]
-    xyz[..., 2] = z
+    _orthographic_points(uv, scale, z, xyz)
     return xyz
+
+
+@kernel
+def _orthographic_points(uv, scale, z, xyz):
+    """Fill ``xyz`` ``(T, J, 3)`` with ``(u / s, v / s, z)``."""
+    n_frames, n_joints = z.shape
+    for t in range(n_frames):
+        for joint in range(n_joints):
+            xyz[t, joint, 0] = uv[t, joint, 0] / scale[t]
+            xyz[t, joint, 1] = uv[t, joint, 1] / scale[t]
+            xyz[t, joint, 2] = z[t, joint]
 
 
 def intrinsics(camera: Camera) -> tuple[float, float, float, float]:
