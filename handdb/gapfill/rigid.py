@@ -20,7 +20,7 @@ from handdb.gapfill.compiled import kernel
 from handdb.gapfill.gaps import Gaps, find_gaps
 from handdb.gapfill.registry import OFFLINE, MethodOutput, register
 from handdb.gapfill.rest_pose import rest_pose_2d
-from handdb.gapfill.transfer import map_points
+from handdb.gapfill.transfer import NO_MAP, fit_map, map_points
 from handdb.skeletons import Skeleton
 
 #: Roles of the joints that move with the palm.
@@ -298,6 +298,7 @@ def _carry_chains(
         unresolved[start[g]:stop[g], joint[g]] = True
     order = np.argsort(depth, kind="mergesort")
     carried = np.empty((n_frames, 2))
+    weights = np.empty(carriers.shape[1], dtype=np.bool_)
     first = 0
     while first < order.size:
         last = first
@@ -312,9 +313,9 @@ def _carry_chains(
             before, after = max(start[g] - 1, 0), min(stop[g], n_frames - 1)
             for frame in range(start[g], stop[g]):
                 x0, y0 = _carry_point(state, unresolved, carriers[joint[g]], joint[g],
-                                      before, frame)
+                                      before, frame, weights)
                 x1, y1 = _carry_point(state, unresolved, carriers[joint[g]], joint[g],
-                                      after, frame)
+                                      after, frame, weights)
                 share = (frame - before) / max(after - before, 1)
                 if start[g] == 0:
                     carried[frame] = x1, y1
@@ -333,14 +334,13 @@ def _carry_chains(
 @kernel
 def _carry_point(
     state: np.ndarray, unresolved: np.ndarray, carrier: np.ndarray, joint: int,
-    reference: int, now: int,
+    reference: int, now: int, weights: np.ndarray,
 ) -> tuple[float, float]:
     """Carry a joint's point from frame ``reference`` to frame ``now`` with its carriers.
 
-    The similarity (rotation, scale, translation) from the carriers' points at
-    ``reference`` to those at ``now`` is fitted by least squares over the carriers
-    resolved in both frames (:func:`~handdb.gapfill.transfer.fit_maps` with
-    ``affine=False``, to rounding) and applied to the joint's point at ``reference``.
+    The similarity from the carriers' points at ``reference`` to those at ``now``, fitted
+    over the carriers resolved in both frames (:func:`~handdb.gapfill.transfer.fit_maps`
+    with ``affine=False``), is applied to the joint's point at ``reference``.
 
     Parameters
     ----------
@@ -352,6 +352,8 @@ def _carry_point(
         ``(J,) bool``: the joints that carry ``joint``.
     joint, reference, now
         The joint and the two frames.
+    weights
+        ``(J,) bool``: scratch space, overwritten.
 
     Returns
     -------
@@ -359,53 +361,12 @@ def _carry_point(
         The carried point, pixels; the point at ``reference`` if no carrier is resolved in
         both frames.
     """
-    count = 0
-    source_x = source_y = target_x = target_y = 0.0
     for k in range(carrier.size):
-        if _carries(unresolved, carrier, joint, k, reference, now):
-            count += 1
-            source_x += _finite_or_zero(state[reference, k, 0])
-            source_y += _finite_or_zero(state[reference, k, 1])
-            target_x += _finite_or_zero(state[now, k, 0])
-            target_y += _finite_or_zero(state[now, k, 1])
+        weights[k] = (carrier[k] and k != joint and not unresolved[reference, k]
+                      and not unresolved[now, k])
+    (a, b, c, d, offset_x, offset_y), kind = fit_map(state[reference], state[now], weights,
+                                                       False)
     query_x, query_y = state[reference, joint, 0], state[reference, joint, 1]
-    if count == 0:
+    if kind == NO_MAP:
         return query_x, query_y
-    source_x, source_y = source_x / count, source_y / count
-    target_x, target_y = target_x / count, target_y / count
-    sxx = syy = cxx = cxy = cyx = cyy = 0.0
-    for k in range(carrier.size):
-        if _carries(unresolved, carrier, joint, k, reference, now):
-            sx = _finite_or_zero(state[reference, k, 0]) - source_x
-            sy = _finite_or_zero(state[reference, k, 1]) - source_y
-            dx = _finite_or_zero(state[now, k, 0]) - target_x
-            dy = _finite_or_zero(state[now, k, 1]) - target_y
-            sxx += sx * sx
-            syy += sy * sy
-            cxx += dx * sx
-            cxy += dx * sy
-            cyx += dy * sx
-            cyy += dy * sy
-    spread = sxx + syy
-    real, imaginary = 1.0, 0.0
-    if count >= 2 and spread > 0:
-        real, imaginary = (cxx + cyy) / spread, (cyx - cxy) / spread
-    offset_x = target_x - real * source_x - (-imaginary) * source_y
-    offset_y = target_y - imaginary * source_x - real * source_y
-    return (real * query_x + (-imaginary) * query_y + offset_x,
-            imaginary * query_x + real * query_y + offset_y)
-
-
-@kernel
-def _carries(
-    unresolved: np.ndarray, carrier: np.ndarray, joint: int, k: int, reference: int, now: int
-) -> bool:
-    """Joint ``k`` carries ``joint`` between the two frames: a carrier resolved in both."""
-    return (carrier[k] and k != joint and not unresolved[reference, k]
-            and not unresolved[now, k])
-
-
-@kernel
-def _finite_or_zero(value: float) -> float:
-    """``value``, or 0 where it is NaN (a NaN carrier coordinate counts as 0)."""
-    return 0.0 if np.isnan(value) else value
+    return a * query_x + b * query_y + offset_x, c * query_x + d * query_y + offset_y

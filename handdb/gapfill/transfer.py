@@ -13,6 +13,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from handdb.gapfill.compiled import kernel
+
 #: Smallest ratio of the two principal spreads of the source points accepted for an
 #: affine fit (below it the points are nearly collinear and the similarity is used).
 MIN_AFFINE_SPREAD = 0.05
@@ -48,31 +50,106 @@ def _member_bits(members: np.ndarray) -> np.ndarray:
     return members @ np.left_shift(1, np.arange(members.shape[1], dtype=np.int64))
 
 
-def _centred(
-    points: np.ndarray, taking_part: np.ndarray, count: np.ndarray
-) -> tuple[np.ndarray, np.ndarray]:
-    """Return the weighted means and the centred coordinates of ``(N, K, 2)`` points.
+@kernel
+def fit_map(
+    source: np.ndarray, target: np.ndarray, weights: np.ndarray, affine: bool
+) -> tuple[tuple[float, float, float, float, float, float], int]:
+    """Fit one source-to-target map (compiled; :func:`fit_maps` fits many).
 
-    ``taking_part`` is ``(K, N) bool`` and ``count`` ``(N,)`` its column sums. Returns the
-    ``(2, N)`` means and ``(2, K, N)`` coordinate planes about them, 0 where a point does
-    not take part (points along the middle axis: numpy reduces a short last axis slowly).
-    A NaN coordinate of a point taking part counts as 0.
+    Parameters
+    ----------
+    source, target
+        ``(K, 2) float64``, pixels; a NaN coordinate of a point taking part counts as 0.
+    weights
+        ``(K,) bool``: the points that take part.
+    affine
+        Fit an affine map where the points allow.
+
+    Returns
+    -------
+    map
+        The linear part row by row, then the offset: ``(a, b, c, d, x, y)``; the offset is
+        NaN where no point took part.
+    kind
+        :data:`AFFINE`, :data:`SIMILARITY`, :data:`TRANSLATION` or :data:`NO_MAP`.
     """
-    planes = points.transpose(2, 1, 0)
-    planes = np.where(taking_part & ~np.isnan(planes), planes, 0.0)
-    mean = planes.sum(axis=1) / np.maximum(count, 1)
-    return mean, np.where(taking_part, planes - mean[:, None], 0.0)
+    count = 0
+    sx_mean = sy_mean = dx_mean = dy_mean = 0.0
+    for k in range(weights.size):
+        if weights[k]:
+            count += 1
+            sx_mean += _finite_or_zero(source[k, 0])
+            sy_mean += _finite_or_zero(source[k, 1])
+            dx_mean += _finite_or_zero(target[k, 0])
+            dy_mean += _finite_or_zero(target[k, 1])
+    divisor = max(count, 1)
+    sx_mean, sy_mean = sx_mean / divisor, sy_mean / divisor
+    dx_mean, dy_mean = dx_mean / divisor, dy_mean / divisor
+    sxx = sxy = syy = cxx = cxy = cyx = cyy = 0.0
+    for k in range(weights.size):
+        if weights[k]:
+            sx = _finite_or_zero(source[k, 0]) - sx_mean
+            sy = _finite_or_zero(source[k, 1]) - sy_mean
+            dx = _finite_or_zero(target[k, 0]) - dx_mean
+            dy = _finite_or_zero(target[k, 1]) - dy_mean
+            sxx += sx * sx
+            sxy += sx * sy
+            syy += sy * sy
+            # c_ij: the sum of target coordinate i times source coordinate j.
+            cxx += dx * sx
+            cxy += dx * sy
+            cyx += dy * sx
+            cyy += dy * sy
+    # The best rotation-and-scale, as the complex number sum(dst * conj(src)) / sum|src|^2.
+    spread = sxx + syy
+    real, imaginary = 1.0, 0.0
+    if count >= 2 and spread > 0:
+        real, imaginary = (cxx + cyy) / spread, (cyx - cxy) / spread
+    a, b, c, d = real, -imaginary, imaginary, real
+    kind = min(count, SIMILARITY)
+    if affine and count >= 3 and _well_spread(sxx, sxy, syy):
+        det = sxx * syy - sxy * sxy
+        a, b = (cxx * syy - cxy * sxy) / det, (cxy * sxx - cxx * sxy) / det
+        c, d = (cyx * syy - cyy * sxy) / det, (cyy * sxx - cyx * sxy) / det
+        kind = AFFINE
+    offset_x, offset_y = np.nan, np.nan
+    if count >= 1:
+        offset_x = dx_mean - a * sx_mean - b * sy_mean
+        offset_y = dy_mean - c * sx_mean - d * sy_mean
+    return (a, b, c, d, offset_x, offset_y), kind
 
 
-def _well_spread(xx: np.ndarray, xy: np.ndarray, yy: np.ndarray) -> np.ndarray:
-    """``(N,) bool``: the smaller principal spread of covariances is wide enough.
+@kernel
+def _well_spread(xx: float, xy: float, yy: float) -> bool:
+    """The smaller principal spread of the covariances ``xx``, ``xy``, ``yy`` is wide enough.
 
-    ``xx``, ``xy``, ``yy`` are the covariances' entries, ``(N,)`` each; the smaller
-    eigenvalue (closed form) must exceed :data:`MIN_AFFINE_SPREAD` times the larger.
+    The smaller eigenvalue (closed form) must exceed :data:`MIN_AFFINE_SPREAD` times the
+    larger.
     """
     half_sum = 0.5 * (xx + yy)
     radius = np.hypot(0.5 * (xx - yy), xy)
-    return half_sum - radius > MIN_AFFINE_SPREAD * np.maximum(half_sum + radius, 1e-300)
+    return half_sum - radius > MIN_AFFINE_SPREAD * max(half_sum + radius, 1e-300)
+
+
+@kernel
+def _finite_or_zero(value: float) -> float:
+    """``value``, or 0 where it is NaN."""
+    return 0.0 if np.isnan(value) else value
+
+
+@kernel
+def _fit_many(
+    source: np.ndarray, target: np.ndarray, weights: np.ndarray, affine: bool
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`fit_map` for each of ``N`` fits: ``(N, 2, 2)``, ``(N, 2)``, ``(N,) int64``."""
+    n_fits = weights.shape[0]
+    linear, offset = np.empty((n_fits, 2, 2)), np.empty((n_fits, 2))
+    kind = np.empty(n_fits, dtype=np.int64)
+    for n in range(n_fits):
+        (a, b, c, d, x, y), kind[n] = fit_map(source[n], target[n], weights[n], affine)
+        linear[n, 0, 0], linear[n, 0, 1], linear[n, 1, 0], linear[n, 1, 1] = a, b, c, d
+        offset[n, 0], offset[n, 1] = x, y
+    return linear, offset, kind
 
 
 def fit_maps(
@@ -101,35 +178,8 @@ def fit_maps(
         :data:`SIMILARITY` (2 points, or collinear ones), :data:`TRANSLATION` (1 point) or
         :data:`NO_MAP` (none).
     """
-    taking_part = np.ascontiguousarray(weights.T)
-    count = taking_part.sum(axis=0)
-    (sx_mean, sy_mean), (sx, sy) = _centred(source, taking_part, count)
-    (dx_mean, dy_mean), (dx, dy) = _centred(target, taking_part, count)
-    sxx, sxy, syy = (sx * sx).sum(axis=0), (sx * sy).sum(axis=0), (sy * sy).sum(axis=0)
-    # cross_ij = sum of target coordinate i times source coordinate j.
-    cxx, cxy = (dx * sx).sum(axis=0), (dx * sy).sum(axis=0)
-    cyx, cyy = (dy * sx).sum(axis=0), (dy * sy).sum(axis=0)
-
-    # The best rotation-and-scale, as the complex number sum(dst * conj(src)) / sum|src|^2.
-    spread = sxx + syy
-    turns = (count >= 2) & (spread > 0)
-    real = np.divide(cxx + cyy, spread, out=np.ones_like(spread), where=turns)
-    imaginary = np.divide(cyx - cxy, spread, out=np.zeros_like(spread), where=turns)
-    linear = np.stack([real, -imaginary, imaginary, real])
-
-    kind = np.minimum(count, SIMILARITY)
-    if affine:
-        spread_ok = (count >= 3) & _well_spread(sxx, sxy, syy)
-        det = np.where(spread_ok, sxx * syy - sxy * sxy, 1.0)
-        general = np.stack([cxx * syy - cxy * sxy, cxy * sxx - cxx * sxy,
-                            cyx * syy - cyy * sxy, cyy * sxx - cyx * sxy]) / det
-        linear = np.where(spread_ok, general, linear)
-        kind = np.where(spread_ok, AFFINE, kind)
-
-    offset = np.stack([dx_mean - linear[0] * sx_mean - linear[1] * sy_mean,
-                       dy_mean - linear[2] * sx_mean - linear[3] * sy_mean], axis=-1)
-    return (linear.T.reshape(-1, 2, 2), np.where((count >= 1)[:, None], offset, np.nan),
-            kind)
+    return _fit_many(np.asarray(source, dtype=np.float64), np.asarray(target, dtype=np.float64),
+                     np.asarray(weights, dtype=np.bool_), affine)
 
 
 def fit_maps_from_shape(
