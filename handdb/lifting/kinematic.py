@@ -36,6 +36,7 @@ seeds 0-4): orthographic mean root-relative |dZ| 1.48 mm, sign accuracy 97.2 %; 
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
@@ -43,6 +44,7 @@ from typing import Any
 import numpy as np
 
 from handdb.clip import Camera
+from handdb.lifting.compiled import kernel
 from handdb.lifting.finger_geometry import FingerCandidates, perspective_candidates
 from handdb.lifting.geometry import (
     accumulate_depths,
@@ -53,7 +55,7 @@ from handdb.lifting.geometry import (
     projected_lengths,
 )
 from handdb.lifting.hand_layout import HandLayout, hand_layout
-from handdb.lifting.hand_prior import SIGN_STATES, score_fingers, score_mirrored_fingers
+from handdb.lifting.hand_prior import score_fingers, score_mirrored_fingers
 from handdb.lifting.palm import palm_signs
 from handdb.lifting.pinhole import camera_rays, estimate_root_depth, walk_rays
 from handdb.lifting.registry import register
@@ -70,6 +72,9 @@ TEMPORAL_FLOOR = 0.02
 
 #: The clip-wide mirror counts as settled when it is this many times less likely.
 MIRROR_SETTLED_ODDS = 20.0
+
+#: Bounds of a sign's confidence: a probability that the chosen sign is right.
+MIN_CONFIDENCE, MAX_CONFIDENCE = 0.5, 1.0
 
 #: Largest say one finger has on a frame's palm tilt, nats: a finger the prior models badly
 #: (an opposed thumb) or a mis-tracked one cannot outvote the others (on the real DHG
@@ -155,9 +160,11 @@ def resolve_signs(
     palm_odds = sign_posterior(votes.sum(axis=1, keepdims=True), palm_depths,
                                acceleration_spread(palm_depths[:, :, 0], floor))[:, 0]
     state = (palm_odds < 0).astype(np.int64)
-    frames = np.arange(n_frames)
-    chosen = scores.bone_log_odds[frames, state]                         # (T, F, 3)
-    best = scores.best[frames, state]                                    # (T, F)
+    chosen = np.empty(scores.bone_log_odds.shape[:1] + scores.bone_log_odds.shape[2:])
+    best = np.empty((n_frames, len(layout.fingers)), dtype=np.int64)
+    mirror_gap = np.empty(best.shape)
+    _pick_palm_state(scores.anatomy, scores.bone_log_odds, scores.best, state, chosen, best,
+                     mirror_gap)
 
     chain_dz = _chain_depths(candidates, state, best, abs_dz, layout)
     floor = TEMPORAL_FLOOR * bone_lengths[layout.chains].ravel()
@@ -168,24 +175,75 @@ def resolve_signs(
 
     # The mirror flips the palm tilt and every finger state at once. Compare each frame's
     # best pose under the chosen tilt with its exact mirror image, on anatomy alone.
-    rows, fingers = frames[:, None], np.arange(len(layout.fingers))[None, :]
-    own = scores.anatomy[rows, state[:, None], fingers, best]
-    mirror = scores.anatomy[rows, 1 - state[:, None], fingers, len(SIGN_STATES) - 1 - best]
-    mirror_log_odds = float(np.sum(own - mirror))
+    mirror_log_odds = float(np.sum(mirror_gap))
     if mirror_log_odds < 0:
         mirror_log_odds, state, finger_signs = -mirror_log_odds, 1 - state, -finger_signs
-    p_mirror = sigmoid(-mirror_log_odds)
 
     signs = np.full((n_frames, skeleton.n_joints), np.nan)
-    signs[:, layout.palm_bones] = palm * (1.0 - 2.0 * state)[:, None]
-    signs[:, layout.chains] = finger_signs
     confidence = np.full(signs.shape, np.nan)
-    confidence[:, layout.palm_bones] = sigmoid(np.abs(palm_odds))[:, None]
-    confidence[:, layout.chains] = sigmoid(np.abs(finger_odds))
-    confidence = confidence * (1.0 - p_mirror) + (1.0 - confidence) * p_mirror
-    return SignSolution(signs=signs, confidence=np.clip(confidence, 0.5, 1.0),
-                        mirror_log_odds=mirror_log_odds, palm_state=state,
-                        finger_signs=finger_signs, candidates=candidates)
+    _fill_signs(palm, state, finger_signs, sigmoid(np.abs(palm_odds)),
+                sigmoid(np.abs(finger_odds)), sigmoid(-mirror_log_odds), layout.palm_bones,
+                layout.chains, signs, confidence)
+    return SignSolution(signs=signs, confidence=confidence, mirror_log_odds=mirror_log_odds,
+                        palm_state=state, finger_signs=finger_signs, candidates=candidates)
+
+
+@kernel
+def _pick_palm_state(anatomy, bone_log_odds, best_states, state, chosen, best, mirror_gap):
+    """Each frame's finger scores under its palm state ``state`` ``(T,)``.
+
+    Takes :class:`handdb.lifting.hand_prior.FingerScores`' ``anatomy``,
+    ``bone_log_odds`` and ``best`` (``best_states``); fills ``chosen`` ``(T, F, 3)`` and
+    ``best`` ``(T, F)`` with the latter two under the frame's palm state, and
+    ``mirror_gap`` ``(T, F)`` with the anatomy of each finger's best state less that of
+    its mirror image (every sign flipped, under the other palm state).
+    """
+    n_frames, _, n_fingers, n_states = anatomy.shape
+    for t in range(n_frames):
+        own = state[t]
+        for f in range(n_fingers):
+            top = best_states[t, own, f]
+            best[t, f] = top
+            chosen[t, f] = bone_log_odds[t, own, f]
+            mirror_gap[t, f] = (anatomy[t, own, f, top]
+                                - anatomy[t, 1 - own, f, n_states - 1 - top])
+
+
+@kernel
+def _fill_signs(palm, state, finger_signs, palm_confidence, finger_confidence, p_mirror,
+                palm_bones, chains, signs, confidence):
+    """Write every bone's sign and its confidence, discounted by the mirror, per frame.
+
+    ``palm`` ``(T, P)`` is the palm's sign pattern in state 0 and ``state`` ``(T,)`` the
+    chosen state; ``finger_signs`` ``(T, F, 3)``; the confidences ``(T,)`` and ``(T, F,
+    3)`` are before the discount by ``p_mirror``, the probability that the whole clip is
+    mirrored. Fills ``signs`` and ``confidence`` ``(T, J)`` at ``palm_bones`` ``(P,)`` and
+    ``chains`` ``(F, 3)``.
+    """
+    n_frames, n_fingers, n_bones = finger_signs.shape
+    for t in range(n_frames):
+        tilt = 1.0 - 2.0 * state[t]
+        palm_sure = _discounted(palm_confidence[t], p_mirror)
+        for i in range(len(palm_bones)):
+            signs[t, palm_bones[i]] = palm[t, i] * tilt
+            confidence[t, palm_bones[i]] = palm_sure
+        for f in range(n_fingers):
+            for b in range(n_bones):
+                signs[t, chains[f, b]] = finger_signs[t, f, b]
+                confidence[t, chains[f, b]] = _discounted(finger_confidence[t, f, b],
+                                                          p_mirror)
+
+
+@kernel
+def _discounted(confidence, p_mirror):
+    """A sign's confidence when the whole clip is mirrored with probability ``p_mirror``.
+
+    Kept within [0.5, 1]; NaN stays NaN.
+    """
+    mixed = confidence * (1.0 - p_mirror) + (1.0 - confidence) * p_mirror
+    if math.isnan(mixed):
+        return mixed
+    return min(max(mixed, MIN_CONFIDENCE), MAX_CONFIDENCE)
 
 
 def _palm_depths(candidates: FingerCandidates | None, palm_z: np.ndarray,
