@@ -35,6 +35,9 @@ NEGLIGIBLE_NATS = 40.0
 #: Posterior log-odds are clipped to this magnitude (a probability of 1 − 1e-13).
 MAX_LOG_ODDS = 30.0
 
+#: What an infinite value counts as, as ``np.nan_to_num`` has it.
+LARGEST_FLOAT = float(np.finfo(np.float64).max)
+
 
 def acceleration_spread(values: np.ndarray, floor: np.ndarray) -> np.ndarray:
     """Spread of each chain's second frame-to-frame difference, as the values are oriented.
@@ -78,12 +81,9 @@ def sign_posterior(log_odds: np.ndarray, values: np.ndarray, spread: np.ndarray)
     numpy.ndarray
         ``(T, K) float64``, clipped to ``±MAX_LOG_ODDS``.
     """
-    # One frame is never surer than MAX_LOG_ODDS: unbounded evidence would let two certain
-    # frames that disagree make every path impossible.
-    evidence = np.clip(np.nan_to_num(log_odds), -MAX_LOG_ODDS, MAX_LOG_ODDS)
-    posterior = np.empty(evidence.shape)
-    _forward_backward(evidence, np.nan_to_num(values), 0.5 / spread**2, posterior)
-    return np.clip(posterior, -MAX_LOG_ODDS, MAX_LOG_ODDS)
+    posterior = np.empty(log_odds.shape)
+    _forward_backward(log_odds, values, 0.5 / spread**2, posterior)
+    return posterior
 
 
 @kernel
@@ -93,6 +93,24 @@ def _log_add_exp(a: float, b: float) -> float:
     if low - high < -NEGLIGIBLE_NATS:
         return high
     return high + math.log1p(math.exp(low - high))
+
+
+@kernel
+def _finite(x: float) -> float:
+    """``np.nan_to_num`` of one value: NaN to 0, infinities to the largest finite floats."""
+    if math.isnan(x):
+        return 0.0
+    if math.isinf(x):
+        return LARGEST_FLOAT if x > 0 else -LARGEST_FLOAT
+    return x
+
+
+@kernel
+def _clipped(x: float) -> float:
+    """``x`` within ``±MAX_LOG_ODDS``; NaN stays NaN."""
+    if math.isnan(x):
+        return x
+    return min(max(x, -MAX_LOG_ODDS), MAX_LOG_ODDS)
 
 
 @kernel
@@ -116,24 +134,34 @@ def _acceleration_costs(values, weight, cost):
 
 @kernel
 def _forward_backward(evidence, values, weight, posterior):
-    """Fill ``posterior`` ``(T, K)``; the chain's states are pairs of consecutive signs.
+    """Fill ``posterior`` ``(T, K)`` as :func:`sign_posterior` returns it.
 
-    ``forward[t, a, b]`` and ``backward[t, a, b]`` are the log-messages of signs ``a`` at
-    ``t − 1`` and ``b`` at ``t`` (0: +, 1: −); ``emission[t, a]`` is frame ``t``'s own
-    evidence for sign ``a``.
+    The chain's states are pairs of consecutive signs: ``forward[t, a, b]`` and
+    ``backward[t, a, b]`` are the log-messages of signs ``a`` at ``t − 1`` and ``b`` at
+    ``t`` (0: +, 1: −); ``emission[t, a]`` is frame ``t``'s own evidence for sign ``a``.
+    NaN in ``evidence`` ``(T, K)`` and ``values`` ``(T, K, 2, D)`` counts as 0.
     """
     n_frames, n_chains = evidence.shape
     if n_frames == 1:
-        posterior[0] = evidence[0]
+        for k in range(n_chains):
+            posterior[0, k] = _clipped(_finite(evidence[0, k]))
         return
     cost = np.zeros((n_frames, 2, 2, 2))
+    chain = np.empty(values.shape[:1] + values.shape[2:])
     emission = np.empty((n_frames, 2))
     forward = np.empty((n_frames, 2, 2))
     backward = np.zeros((n_frames, 2, 2))
     for k in range(n_chains):
-        _acceleration_costs(values[:, k], weight[k], cost)
         for t in range(n_frames):
-            emission[t, 0], emission[t, 1] = 0.5 * evidence[t, k], -0.5 * evidence[t, k]
+            for sign in range(2):
+                for d in range(chain.shape[2]):
+                    chain[t, sign, d] = _finite(values[t, k, sign, d])
+        _acceleration_costs(chain, weight[k], cost)
+        for t in range(n_frames):
+            # One frame is never surer than MAX_LOG_ODDS: unbounded evidence would let two
+            # certain frames that disagree make every path impossible.
+            own = _clipped(_finite(evidence[t, k]))
+            emission[t, 0], emission[t, 1] = 0.5 * own, -0.5 * own
         for a in range(2):
             for b in range(2):
                 forward[1, a, b] = emission[0, a] + emission[1, b]
@@ -150,12 +178,12 @@ def _forward_backward(evidence, values, weight, posterior):
                         emission[t + 1, 0] - cost[t + 1, a, b, 0] + backward[t + 1, b, 0],
                         emission[t + 1, 1] - cost[t + 1, a, b, 1] + backward[t + 1, b, 1])
         for t in range(1, n_frames):
-            posterior[t, k] = (
+            posterior[t, k] = _clipped(
                 _log_add_exp(forward[t, 0, 0] + backward[t, 0, 0],
                              forward[t, 1, 0] + backward[t, 1, 0])
                 - _log_add_exp(forward[t, 0, 1] + backward[t, 0, 1],
                                forward[t, 1, 1] + backward[t, 1, 1]))
-        posterior[0, k] = (
+        posterior[0, k] = _clipped(
             _log_add_exp(forward[1, 0, 0] + backward[1, 0, 0],
                          forward[1, 0, 1] + backward[1, 0, 1])
             - _log_add_exp(forward[1, 1, 0] + backward[1, 1, 0],
