@@ -27,6 +27,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from handdb.gapfill.compiled import kernel
 from handdb.gapfill.gaps import Gaps, mask_points
 
 #: Frames either side of a gap whose samples train its regression.
@@ -219,28 +220,52 @@ def _training_frames(
     complete
         ``(T,) bool``: the frames the block sums cover where they cover a block.
     """
-    n_frames = gaps.n_frames
-    low = np.maximum(gaps.start - WINDOW, 0)
-    high = np.minimum(gaps.stop + WINDOW, n_frames)
-    window = low[:, None] + np.arange(np.max(high - low, initial=0))
-    inside = window < high[:, None]
-    window = np.minimum(window, n_frames - 1)
-    train = inside & ((missing_bits[problem[:, None], window]
-                       & _bit_sets(needed)[:, None]) == 0)
-    blocks = np.stack([-(-low // BLOCK), high // BLOCK], axis=1)
-    blocks[:, 1] = np.maximum(blocks[:, 1], blocks[:, 0])
-    summed = (inside & complete[window] & (window >= BLOCK * blocks[:, :1])
-              & (window < BLOCK * blocks[:, 1:]))
-    listed = train != summed
-    n_rows = listed.sum(axis=1)
-    gap, slot = mask_points(listed)
-    place = (gap, np.arange(gap.size) - np.repeat(np.cumsum(n_rows) - n_rows, n_rows))
-    width = max(int(n_rows.max(initial=0)), 1)
-    rows = np.full((len(gaps), width), n_frames)
-    rows[place] = window[gap, slot]
-    signs = np.zeros((len(gaps), width))
-    signs[place] = np.where(train[gap, slot], 1.0, -1.0)
-    return _Training(rows, signs, n_rows, train.sum(axis=1), blocks)
+    return _Training(*_list_training_frames(missing_bits, problem, gaps.start, gaps.stop,
+                                            _bit_sets(needed), complete))
+
+
+@kernel
+def _list_training_frames(
+    missing_bits: np.ndarray, problem: np.ndarray, start: np.ndarray, stop: np.ndarray,
+    needed_bits: np.ndarray, complete: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The fields of :class:`_Training` (see :func:`_training_frames`).
+
+    Parameters
+    ----------
+    missing_bits, problem, complete
+        As for :func:`_training_frames`.
+    start, stop
+        ``(G,) int64``: the gaps' frames.
+    needed_bits
+        ``(G,) int64``: bit ``c`` set where column ``c`` must be observed to train.
+
+    Returns
+    -------
+    rows, signs, n_rows, n_train, blocks
+        As in :class:`_Training`.
+    """
+    n_gaps, n_frames = start.size, complete.size
+    low, high = np.maximum(start - WINDOW, 0), np.minimum(stop + WINDOW, n_frames)
+    rows = np.full((n_gaps, max(np.max(high - low), 1)), n_frames)
+    signs = np.zeros(rows.shape)
+    n_rows, n_train = np.zeros(n_gaps, dtype=np.int64), np.zeros(n_gaps, dtype=np.int64)
+    blocks = np.empty((n_gaps, 2), dtype=np.int64)
+    for g in range(n_gaps):
+        first_block = -(-low[g] // BLOCK)
+        blocks[g, 0], blocks[g, 1] = first_block, max(high[g] // BLOCK, first_block)
+        for frame in range(low[g], high[g]):
+            train = (missing_bits[problem[g], frame] & needed_bits[g]) == 0
+            summed = (complete[frame] and frame >= BLOCK * blocks[g, 0]
+                      and frame < BLOCK * blocks[g, 1])
+            n_train[g] += train
+            if train != summed:
+                rows[g, n_rows[g]] = frame
+                signs[g, n_rows[g]] = 1.0 if train else -1.0
+                n_rows[g] += 1
+    width = max(np.max(n_rows), 1)
+    return (np.ascontiguousarray(rows[:, :width]), np.ascontiguousarray(signs[:, :width]),
+            n_rows, n_train, blocks)
 
 
 def _predict_gaps(
