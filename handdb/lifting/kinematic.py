@@ -204,7 +204,8 @@ def _pick_palm_state(anatomy, bone_log_odds, best_states, state, chosen, best, m
         for f in range(n_fingers):
             top = best_states[t, own, f]
             best[t, f] = top
-            chosen[t, f] = bone_log_odds[t, own, f]
+            for bone in range(chosen.shape[2]):
+                chosen[t, f, bone] = bone_log_odds[t, own, f, bone]
             mirror_gap[t, f] = (anatomy[t, own, f, top]
                                 - anatomy[t, 1 - own, f, n_states - 1 - top])
 

@@ -50,8 +50,16 @@ def palm_signs(xy: np.ndarray, abs_dz: np.ndarray, skeleton: Skeleton,
     combos = np.array(list(itertools.product((1.0, -1.0), repeat=len(bones) - 1)))
     combos = np.concatenate([np.ones((len(combos), 1)), combos], axis=1)
     spans = np.nan_to_num(abs_dz[:, bones])[:, None, :] * to_depth       # (T, Q, P)
+    # The bones each joint's depth sums, in bone order: a sum over all of them would add
+    # mostly zeros.
+    on_path = to_depth > 0
+    path_lengths = on_path.sum(axis=1)
+    paths = np.zeros(on_path.shape, dtype=np.int64)
+    for q in range(len(joints)):
+        paths[q, : path_lengths[q]] = np.flatnonzero(on_path[q])
     best = np.empty(len(xy), dtype=np.int64)
-    _best_plane_patterns(np.nan_to_num(xy[:, joints]), spans, combos, PLANE_RIDGE, best)
+    _best_plane_patterns(np.nan_to_num(xy[:, joints]), spans, combos, paths, path_lengths,
+                         PLANE_RIDGE, best)
     depths = np.einsum("tqp,tp->tq", spans, combos[best])
     return combos[best] * continuity_signs(depths)[:, None]
 
@@ -77,15 +85,16 @@ def continuity_signs(depths: np.ndarray) -> np.ndarray:
 
 
 @kernel
-def _best_plane_patterns(xy, spans, combos, ridge, best):
+def _best_plane_patterns(xy, spans, combos, paths, path_lengths, ridge, best):
     """Fill ``best`` ``(T,)`` with the pattern whose joint depths fit a plane best.
 
     ``xy`` is ``(T, Q, 2)``, the palm joints in the image plane; ``spans`` ``(T, Q, P)``
-    the depth each bone adds to each joint; ``combos`` ``(C, P)`` the sign patterns. The
-    misfit of depths ``z`` is ``z·z − bᵀ M⁻¹ b`` with ``M = DᵀD + ridge·I`` and
-    ``b = Dᵀz``, ``D`` the design ``[x, y, 1]``.
+    the depth each bone adds to each joint, nonzero only for the bones
+    ``paths[q, :path_lengths[q]]`` (``(Q, P)`` and ``(Q,)``); ``combos`` ``(C, P)`` the
+    sign patterns. The misfit of depths ``z`` is ``z·z − bᵀ M⁻¹ b`` with
+    ``M = DᵀD + ridge·I`` and ``b = Dᵀz``, ``D`` the design ``[x, y, 1]``.
     """
-    n_frames, n_joints, n_bones = spans.shape
+    n_frames, n_joints, _ = spans.shape
     normal, inverse = np.empty((3, 3)), np.empty((3, 3))
     for t in range(n_frames):
         normal[:] = 0.0
@@ -106,7 +115,8 @@ def _best_plane_patterns(xy, spans, combos, ridge, best):
             zz = bx = by = b1 = 0.0
             for q in range(n_joints):
                 z = 0.0
-                for p in range(n_bones):
+                for step in range(path_lengths[q]):
+                    p = paths[q, step]
                     z += spans[t, q, p] * combos[c, p]
                 zz += z * z
                 bx += xy[t, q, 0] * z
