@@ -33,6 +33,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
+from handdb.gapfill.compiled import kernel
 from handdb.gapfill.gaps import Gaps, find_gaps, mask_points
 from handdb.gapfill.interpolate import interpolate_gaps
 from handdb.gapfill.lowrank import DEFAULT_VARIANCE, blend_to_edges, lowrank_reconstruct
@@ -124,23 +125,77 @@ def validation_mask(missing: np.ndarray, gaps: Gaps, seed: int = 0) -> np.ndarra
     """
     rng = np.random.default_rng(seed)
     n_frames = missing.shape[0]
-    hidden = np.zeros_like(missing)
-    missing_so_far = np.zeros((missing.shape[1], n_frames + 1), dtype=np.int32)
-    np.cumsum(missing.T, axis=1, out=missing_so_far[:, 1:])
     by_joint = np.lexsort((gaps.length, gaps.joint))
     joints, first, counts = np.unique(gaps.joint[by_joint], return_index=True,
                                       return_counts=True)
     ordered = gaps.length[by_joint]
     medians = 0.5 * (ordered[first + (counts - 1) // 2] + ordered[first + counts // 2])
     lengths = np.minimum(medians, n_frames // 4).astype(np.int64)
-    for joint, length in zip(joints, lengths, strict=True):
-        so_far = missing_so_far[joint]
-        clear = so_far[length + 2:] == so_far[:n_frames - length - 1]
-        starts = np.flatnonzero(clear) + 1
-        for start in rng.permutation(starts)[:VALIDATION_GAPS]:
-            hidden[start:start + length, joint] |= ~hidden[start - 1:start + length + 1,
-                                                            joint].any()
+    starts, n_starts = _clear_starts(missing, joints, lengths)
+    picks = [rng.permutation(n)[:VALIDATION_GAPS] for n in n_starts]
+    owner = np.repeat(np.arange(joints.size), [pick.size for pick in picks])
+    first_start = np.cumsum(n_starts) - n_starts
+    chosen = starts[first_start[owner] + np.concatenate([np.empty(0, dtype=np.int64), *picks])]
+    hidden = np.zeros_like(missing)
+    _hide_runs(hidden, joints[owner], lengths[owner], chosen)
     return hidden
+
+
+@kernel
+def _clear_starts(
+    missing: np.ndarray, joints: np.ndarray, lengths: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """The frames where a run of each joint can start, observed one frame either side.
+
+    Parameters
+    ----------
+    missing
+        ``(T, J) bool``.
+    joints, lengths
+        ``(K,) int64``: the joints, and the length of their runs, frames.
+
+    Returns
+    -------
+    starts
+        ``(S,) int64``: each joint's possible first frames (from 1), ascending, joint after
+        joint, where the joint is observed from the frame before to the frame after the run.
+    n_starts
+        ``(K,) int64``: how many of ``starts`` are each joint's.
+    """
+    n_frames = missing.shape[0]
+    starts = np.empty(joints.size * n_frames, dtype=np.int64)
+    n_starts = np.zeros(joints.size, dtype=np.int64)
+    missing_so_far = np.zeros(n_frames + 1, dtype=np.int64)
+    total = 0
+    for index in range(joints.size):
+        joint, length = joints[index], lengths[index]
+        for frame in range(n_frames):
+            missing_so_far[frame + 1] = missing_so_far[frame] + missing[frame, joint]
+        for start in range(1, n_frames - length):
+            if missing_so_far[start + length + 1] == missing_so_far[start - 1]:
+                starts[total] = start
+                total += 1
+                n_starts[index] += 1
+    return starts[:total], n_starts
+
+
+@kernel
+def _hide_runs(hidden: np.ndarray, joint: np.ndarray, length: np.ndarray, start: np.ndarray
+               ) -> None:
+    """Hide runs in turn, each unless it would touch a run hidden before.
+
+    Parameters
+    ----------
+    hidden
+        ``(T, J) bool``, modified.
+    joint, length, start
+        ``(R,) int64``: each run's joint, length (frames) and first frame (from 1, ending
+        before the last frame).
+    """
+    for run in range(joint.size):
+        first, stop, j = start[run], start[run] + length[run], joint[run]
+        if not hidden[first - 1:stop + 1, j].any():
+            hidden[first:stop, j] = True
 
 
 def _long_gap_fill(
