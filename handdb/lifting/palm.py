@@ -92,42 +92,67 @@ def _best_plane_patterns(xy, spans, combos, paths, path_lengths, ridge, best):
     the depth each bone adds to each joint, nonzero only for the bones
     ``paths[q, :path_lengths[q]]`` (``(Q, P)`` and ``(Q,)``); ``combos`` ``(C, P)`` the
     sign patterns. The misfit of depths ``z`` is ``z·z − bᵀ M⁻¹ b`` with
-    ``M = DᵀD + ridge·I`` and ``b = Dᵀz``, ``D`` the design ``[x, y, 1]``.
+    ``M = DᵀD + ridge·I`` and ``b = Dᵀz``, ``D`` the design ``[x, y, 1]``. The sums run
+    over the joints for all patterns at once, so that the loop over the patterns is
+    innermost and vectorises.
     """
     n_frames, n_joints, _ = spans.shape
+    n_combos = combos.shape[0]
+    signs = np.ascontiguousarray(combos.T)                               # (P, C)
     normal, inverse = np.empty((3, 3)), np.empty((3, 3))
+    z, zz, bx = np.empty(n_combos), np.empty(n_combos), np.empty(n_combos)
+    by, b1 = np.empty(n_combos), np.empty(n_combos)
     for t in range(n_frames):
-        normal[:] = 0.0
+        _plane_inverse(xy[t], ridge, normal, inverse)
+        zz[:] = 0.0
+        bx[:] = 0.0
+        by[:] = 0.0
+        b1[:] = 0.0
         for q in range(n_joints):
+            z[:] = 0.0
+            for step in range(path_lengths[q]):
+                p = paths[q, step]
+                span = spans[t, q, p]
+                for c in range(n_combos):
+                    z[c] += span * signs[p, c]
             x, y = xy[t, q, 0], xy[t, q, 1]
-            normal[0, 0] += x * x
-            normal[0, 1] += x * y
-            normal[0, 2] += x
-            normal[1, 1] += y * y
-            normal[1, 2] += y
-        normal[1, 0], normal[2, 0], normal[2, 1] = normal[0, 1], normal[0, 2], normal[1, 2]
-        normal[2, 2] = n_joints
-        for k in range(3):
-            normal[k, k] += ridge
-        _invert_3x3(normal, inverse)
+            for c in range(n_combos):
+                zz[c] += z[c] * z[c]
+                bx[c] += x * z[c]
+                by[c] += y * z[c]
+                b1[c] += z[c]
         lowest = np.inf
-        for c in range(combos.shape[0]):
-            zz = bx = by = b1 = 0.0
-            for q in range(n_joints):
-                z = 0.0
-                for step in range(path_lengths[q]):
-                    p = paths[q, step]
-                    z += spans[t, q, p] * combos[c, p]
-                zz += z * z
-                bx += xy[t, q, 0] * z
-                by += xy[t, q, 1] * z
-                b1 += z
-            fitted = (bx * (inverse[0, 0] * bx + inverse[0, 1] * by + inverse[0, 2] * b1)
-                      + by * (inverse[1, 0] * bx + inverse[1, 1] * by + inverse[1, 2] * b1)
-                      + b1 * (inverse[2, 0] * bx + inverse[2, 1] * by + inverse[2, 2] * b1))
-            if zz - fitted < lowest:
-                lowest = zz - fitted
+        for c in range(n_combos):
+            fitted = (bx[c] * (inverse[0, 0] * bx[c] + inverse[0, 1] * by[c]
+                               + inverse[0, 2] * b1[c])
+                      + by[c] * (inverse[1, 0] * bx[c] + inverse[1, 1] * by[c]
+                                 + inverse[1, 2] * b1[c])
+                      + b1[c] * (inverse[2, 0] * bx[c] + inverse[2, 1] * by[c]
+                                 + inverse[2, 2] * b1[c]))
+            if zz[c] - fitted < lowest:
+                lowest = zz[c] - fitted
                 best[t] = c
+
+
+@kernel
+def _plane_inverse(xy, ridge, normal, inverse):
+    """Write ``(DᵀD + ridge·I)⁻¹`` to ``inverse``, ``D = [x, y, 1]`` of ``xy`` ``(Q, 2)``.
+
+    ``normal`` ``(3, 3)`` is scratch space for ``DᵀD + ridge·I``.
+    """
+    normal[:] = 0.0
+    for q in range(xy.shape[0]):
+        x, y = xy[q, 0], xy[q, 1]
+        normal[0, 0] += x * x
+        normal[0, 1] += x * y
+        normal[0, 2] += x
+        normal[1, 1] += y * y
+        normal[1, 2] += y
+    normal[1, 0], normal[2, 0], normal[2, 1] = normal[0, 1], normal[0, 2], normal[1, 2]
+    normal[2, 2] = xy.shape[0]
+    for k in range(3):
+        normal[k, k] += ridge
+    _invert_3x3(normal, inverse)
 
 
 @kernel
