@@ -51,11 +51,7 @@ def bone_bounds(
         view when no bound varies from frame to frame).
     """
     parent, child = skeleton.bones.T
-    bone = np.take(uv, child, axis=1) - np.take(uv, parent, axis=1)
-    squared = bone[..., 0] ** 2 + bone[..., 1] ** 2
-    either_missing = np.take(missing, child, axis=1) | np.take(missing, parent, axis=1)
-    squared[either_missing] = -1.0
-    longest_seen = squared.max(axis=0, initial=-1.0)
+    longest_seen = _longest_seen(uv, missing, parent, child)
     bounds = np.where(longest_seen >= 0, np.sqrt(np.maximum(longest_seen, 0.0)) * LENGTH_SLACK,
                       np.inf)
     n_frames = uv.shape[0]
@@ -65,6 +61,27 @@ def bone_bounds(
                                     (n_frames, 1))
         bounds = np.where(np.isfinite(lengths), per_frame * lengths, bounds)
     return np.broadcast_to(bounds, (n_frames, bounds.shape[-1]))
+
+
+@kernel
+def _longest_seen(
+    uv: np.ndarray, missing: np.ndarray, parent: np.ndarray, child: np.ndarray
+) -> np.ndarray:
+    """Each bone's longest squared length with both its ends observed.
+
+    ``uv`` is ``(T, J, 2)`` pixels (finite where observed), ``missing`` ``(T, J) bool``,
+    ``parent`` and ``child`` the bones' joints, ``(B,) int64``. Returns ``(B,) float64``,
+    squared pixels, -1 for a bone never seen whole.
+    """
+    longest = np.full(parent.size, -1.0)
+    for b in range(parent.size):
+        p, c = parent[b], child[b]
+        for frame in range(uv.shape[0]):
+            if not (missing[frame, c] or missing[frame, p]):
+                bone_x = uv[frame, c, 0] - uv[frame, p, 0]
+                bone_y = uv[frame, c, 1] - uv[frame, p, 1]
+                longest[b] = max(longest[b], bone_x * bone_x + bone_y * bone_y)
+    return longest
 
 
 def refine_bone_lengths(
