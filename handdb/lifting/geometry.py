@@ -71,9 +71,35 @@ def eq6_scale(projected: np.ndarray, bone_lengths: np.ndarray, rank: int = 1) ->
         ``(T,) float64``, pixels per clip unit; NaN for frames with fewer than ``rank``
         finite ratios.
     """
-    ratio = projected / bone_lengths
-    ranked = -np.sort(np.where(np.isfinite(ratio), -ratio, np.inf), axis=1)
-    return np.where(np.isfinite(ranked[:, rank - 1]), ranked[:, rank - 1], np.nan)
+    scale = np.empty(len(projected))
+    _ranked_ratios(projected, bone_lengths, rank, scale)
+    return scale
+
+
+@kernel
+def _ranked_ratios(projected, bone_lengths, rank, scale):
+    """Fill ``scale`` ``(T,)`` with each frame's ``rank``-th largest finite ratio.
+
+    The ratios are of ``projected`` ``(T, J)`` to ``bone_lengths`` ``(J,)``; NaN where a
+    frame has fewer than ``rank``.
+    """
+    n_frames, n_joints = projected.shape
+    top = np.empty(rank)                                    # the largest so far, descending
+    for t in range(n_frames):
+        found = 0
+        for joint in range(n_joints):
+            ratio = projected[t, joint] / bone_lengths[joint]
+            if not math.isfinite(ratio):
+                continue
+            found += 1
+            if found > rank and ratio <= top[rank - 1]:
+                continue
+            slot = min(found, rank) - 1
+            while slot > 0 and top[slot - 1] < ratio:
+                top[slot] = top[slot - 1]
+                slot -= 1
+            top[slot] = ratio
+        scale[t] = top[rank - 1] if found >= rank else np.nan
 
 
 def depth_magnitudes(
@@ -100,11 +126,27 @@ def depth_magnitudes(
         length the track makes the bone. (The thesis instead lengthens the bone in steps of
         0.001 until the root is real.)
     """
-    in_plane = projected / scale[:, None]
-    discriminant = bone_lengths**2 - in_plane**2
-    abs_dz = np.sqrt(np.clip(discriminant, 0.0, None))
-    inconsistency = np.clip(in_plane - bone_lengths, 0.0, None)
+    abs_dz, inconsistency = np.empty(projected.shape), np.empty(projected.shape)
+    _depth_magnitudes(projected, bone_lengths, scale, abs_dz, inconsistency)
     return abs_dz, inconsistency
+
+
+@kernel
+def _depth_magnitudes(projected, bone_lengths, scale, abs_dz, inconsistency):
+    """Fill :func:`depth_magnitudes`' ``abs_dz`` and ``inconsistency`` ``(T, J)``."""
+    n_frames, n_joints = projected.shape
+    for t in range(n_frames):
+        for joint in range(n_joints):
+            in_plane = projected[t, joint] / scale[t]
+            length = bone_lengths[joint]
+            abs_dz[t, joint] = math.sqrt(_at_least_zero(length * length - in_plane * in_plane))
+            inconsistency[t, joint] = _at_least_zero(in_plane - length)
+
+
+@kernel
+def _at_least_zero(x: float) -> float:
+    """``max(x, 0)``; NaN stays NaN."""
+    return x if math.isnan(x) else max(x, 0.0)
 
 
 def path_matrix(skeleton: Skeleton) -> np.ndarray:
