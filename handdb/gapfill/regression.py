@@ -28,7 +28,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from handdb.gapfill.compiled import kernel
-from handdb.gapfill.gaps import Gaps, mask_points
+from handdb.gapfill.gaps import Gaps
 
 #: Frames either side of a gap whose samples train its regression.
 WINDOW = 400
@@ -60,49 +60,23 @@ class Samples:
         ``(T + 1, 2 C + 1) float64``: the coordinates minus ``centre``, 0 where missing,
         then a column of ones (so one matrix product gives counts, sums and scatter); the
         last row, all zeros, stands for "no sample".
-    seen
-        ``(T, C) bool``: the points observed.
     complete
         ``(T,) bool``: the frames where every column is observed.
     running
         ``(T // BLOCK + 1, 2 C + 1, 2 C + 1) float64``: running sums of the moments of the
         complete frames, by blocks (:func:`_block_moments`).
-    low, high
-        ``(2 C,) float64``: the lowest and highest observed value of each coordinate.
     """
 
     columns: np.ndarray
     centre: np.ndarray
     values: np.ndarray
-    seen: np.ndarray
     complete: np.ndarray
     running: np.ndarray
-    low: np.ndarray
-    high: np.ndarray
 
     def coordinates(self, frame: np.ndarray, column: np.ndarray) -> np.ndarray:
         """``(N, 2) float64``, pixels: the observed points of ``column`` at ``frame``."""
         pair = 2 * column[:, None] + np.arange(2)
         return self.values[frame[:, None], pair] + self.centre[pair]
-
-    def observed_range(self, seen: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """``(2 C,)`` lowest and highest value of each coordinate where ``seen`` ``(T, C)``.
-
-        ``seen`` is a subset of :attr:`seen`; only the columns where a point it leaves out
-        holds an extreme are searched again.
-        """
-        frame, column = mask_points(self.seen & ~seen)
-        pair = 2 * column[:, None] + np.arange(2)
-        left_out = self.values[frame[:, None], pair] + self.centre[pair]
-        extreme = (left_out == self.low[pair]) | (left_out == self.high[pair])
-        low, high = self.low.copy(), self.high.copy()
-        for again in np.unique(pair[extreme]):
-            rows = seen[:, again // 2]
-            low[again] = np.min(self.values[:-1, again], where=rows, initial=np.inf)
-            high[again] = np.max(self.values[:-1, again], where=rows, initial=-np.inf)
-            low[again] += self.centre[again]
-            high[again] += self.centre[again]
-        return low, high
 
 
 def _bit_sets(members: np.ndarray) -> np.ndarray:
@@ -137,11 +111,8 @@ def regression_samples(uv: np.ndarray, missing: np.ndarray, columns: np.ndarray)
     values = np.zeros((n_frames + 1, coordinates.shape[1] + 1))
     np.subtract(coordinates, centre, out=values[:-1, :-1], where=seen_coordinates)
     values[:-1, -1] = 1.0
-    low = np.min(values[:-1, :-1], axis=0, where=seen_coordinates, initial=np.inf) + centre
-    high = np.max(values[:-1, :-1], axis=0, where=seen_coordinates, initial=-np.inf) + centre
     complete = np.asarray(seen.all(axis=1), dtype=bool)
-    return Samples(columns, centre, values, seen, complete,
-                   _block_moments(values, complete), low, high)
+    return Samples(columns, centre, values, complete, _block_moments(values, complete))
 
 
 def _block_moments(values: np.ndarray, complete: np.ndarray) -> np.ndarray:
@@ -335,6 +306,60 @@ def _blend_to_edges(
     return predicted[gap, offset + 1] + (1 - share) * before[gap] + share * after[gap]
 
 
+@kernel
+def _read_problem(
+    missing: np.ndarray, columns: np.ndarray, predictors: np.ndarray, joint: np.ndarray,
+    start: np.ndarray, stop: np.ndarray, values: np.ndarray, centre: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """What the regressions of one problem need to know of its missing points.
+
+    Parameters
+    ----------
+    missing
+        ``(T, J) bool``: the problem's missing points.
+    columns
+        ``(C,) int64``: the joints the samples read (``Samples.columns``).
+    predictors
+        ``(J,) bool``: joints that may serve as predictors.
+    joint, start, stop
+        ``(G,) int64``: the problem's gaps.
+    values, centre
+        ``Samples.values`` and ``Samples.centre``.
+
+    Returns
+    -------
+    usable
+        ``(G, C) bool``: each gap's predictors, seen throughout the gap and the frame either
+        side.
+    missing_bits
+        ``(T,) int64``: bit ``c`` set where column ``c`` is missing.
+    low, high
+        ``(2 C,) float64``, pixels: the lowest and highest value of each coordinate where
+        seen (``inf`` and ``-inf`` where never).
+    """
+    n_frames, n_columns = missing.shape[0], columns.size
+    missing_so_far = np.zeros((n_frames + 1, n_columns), dtype=np.int64)
+    missing_bits = np.zeros(n_frames, dtype=np.int64)
+    low, high = np.full(2 * n_columns, np.inf), np.full(2 * n_columns, -np.inf)
+    for frame in range(n_frames):
+        for c in range(n_columns):
+            gone = missing[frame, columns[c]]
+            missing_so_far[frame + 1, c] = missing_so_far[frame, c] + gone
+            if gone:
+                missing_bits[frame] |= 1 << c
+            else:
+                for k in range(2 * c, 2 * c + 2):
+                    low[k] = min(low[k], values[frame, k])
+                    high[k] = max(high[k], values[frame, k])
+    usable = np.empty((joint.size, n_columns), dtype=np.bool_)
+    for g in range(joint.size):
+        first, last = max(start[g] - 1, 0), min(stop[g] + 1, n_frames)
+        for c in range(n_columns):
+            usable[g, c] = (missing_so_far[last, c] == missing_so_far[first, c]
+                            and predictors[columns[c]] and columns[c] != joint[g])
+    return usable, missing_bits, low + centre, high + centre
+
+
 def regression_estimates(
     samples: Samples, predictors: np.ndarray, problems: Sequence[tuple[np.ndarray, Gaps]]
 ) -> list[np.ndarray]:
@@ -375,15 +400,9 @@ def regression_estimates(
     high = np.empty_like(low)
     usable = np.empty((len(gaps), columns.size), dtype=bool)
     for index, (missing, part) in enumerate(problems):
-        missing_columns = missing[:, columns]
-        missing_so_far = np.zeros((n_frames + 1, columns.size), dtype=np.int32)
-        np.cumsum(missing_columns, axis=0, out=missing_so_far[1:])
-        first = missing_so_far[np.maximum(part.start - 1, 0)]
-        last = missing_so_far[np.minimum(part.stop + 1, n_frames)]
-        usable[problem == index] = ((first == last) & predictors[columns]
-                                    & (columns != part.joint[:, None]))
-        missing_bits[index] = _bit_sets(missing_columns)
-        low[index], high[index] = samples.observed_range(~missing_columns)
+        usable[problem == index], missing_bits[index], low[index], high[index] = _read_problem(
+            missing, columns, predictors, part.joint, part.start, part.stop, samples.values,
+            samples.centre)
     own = np.arange(columns.size) == np.searchsorted(columns, gaps.joint)[:, None]
     training = _training_frames(missing_bits, problem, gaps, usable | own, samples.complete)
     span = int(np.max(gaps.length, initial=0)) + 2
