@@ -13,6 +13,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.interpolate import CubicSpline
 
+from handdb.gapfill.compiled import kernel
 from handdb.gapfill.gaps import Gaps, find_gaps
 from handdb.gapfill.registry import OFFLINE, MethodOutput, register
 from handdb.skeletons import Skeleton
@@ -21,52 +22,38 @@ from handdb.skeletons import Skeleton
 KINDS = ("linear", "cubic", "pchip")
 
 
-def _edge_slope(h0: np.ndarray, h1: np.ndarray, m0: np.ndarray, m1: np.ndarray) -> np.ndarray:
+@kernel
+def _sign(value: float) -> float:
+    """``np.sign`` of a float: 1, -1, 0, or NaN for NaN."""
+    if value > 0:
+        return 1.0
+    if value < 0:
+        return -1.0
+    return value if value != value else 0.0
+
+
+@kernel
+def _edge_slope(h0: int, h1: int, m0: float, m1: float) -> float:
     """PCHIP's one-sided three-point slope at an end sample, kept shape-preserving.
 
-    ``h0``, ``m0``: width and secant of the end interval; ``h1``, ``m1``: of the next one.
+    ``h0``, ``m0``: width (frames) and secant of the end interval; ``h1``, ``m1``: of the
+    next one.
     """
     slope = ((2 * h0 + h1) * m0 - h0 * m1) / (h0 + h1)
-    wrong_sign = np.sign(slope) != np.sign(m0)
-    overshoots = (np.sign(m0) != np.sign(m1)) & (np.abs(slope) > 3 * np.abs(m0))
-    return np.where(wrong_sign, 0.0, np.where(overshoots, 3 * m0, slope))
+    if _sign(slope) != _sign(m0):
+        return 0.0
+    if _sign(m0) != _sign(m1) and abs(slope) > 3 * abs(m0):
+        return 3 * m0
+    return slope
 
 
-def _inner_slope(
-    h_before: np.ndarray, h_after: np.ndarray, m_before: np.ndarray, m_after: np.ndarray
-) -> np.ndarray:
+@kernel
+def _inner_slope(h_before: int, h_after: int, m_before: float, m_after: float) -> float:
     """PCHIP's slope at an inner sample: 0 at an extremum, else a weighted harmonic mean."""
+    if _sign(m_before) != _sign(m_after) or m_before == 0 or m_after == 0:
+        return 0.0
     w_before, w_after = 2 * h_after + h_before, h_after + 2 * h_before
-    turns = (np.sign(m_before) != np.sign(m_after)) | (m_before == 0) | (m_after == 0)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        mean = (w_before / m_before + w_after / m_after) / (w_before + w_after)
-        return np.where(turns, 0.0, 1.0 / mean)
-
-
-def _outer_samples(
-    gaps: Gaps, before: np.ndarray, after: np.ndarray
-) -> tuple[np.ndarray, np.ndarray]:
-    """The joint's samples next to the ``before`` and ``after`` samples of each gap.
-
-    Gaps are ordered by joint, then start, so a sample missing next to ``before`` (or
-    ``after``) belongs to the previous (or next) gap of the joint, and the sample beyond
-    is the one bounding that gap.
-
-    Returns
-    -------
-    earlier, later
-        ``(G,) int64``: the last observed frame before ``before`` (-1 if none) and the first
-        after ``after`` (``T`` if none).
-    """
-    same_joint = gaps.joint[1:] == gaps.joint[:-1]
-    previous_touches = np.zeros(len(gaps), dtype=bool)
-    previous_touches[1:] = same_joint & (gaps.stop[:-1] == before[1:])
-    earlier = np.where(previous_touches, np.roll(gaps.start, 1) - 1, before - 1)
-    next_touches = np.zeros(len(gaps), dtype=bool)
-    next_touches[:-1] = same_joint & (gaps.start[1:] == after[:-1] + 1)
-    later = np.where(next_touches, np.roll(gaps.stop, -1), after + 1)
-    return (np.where(gaps.leading, -1, earlier),
-            np.where(gaps.trailing, gaps.n_frames, later))
+    return 1.0 / ((w_before / m_before + w_after / m_after) / (w_before + w_after))
 
 
 def _pchip_in_gaps(uv: np.ndarray, gaps: Gaps) -> np.ndarray:
@@ -89,36 +76,60 @@ def _pchip_in_gaps(uv: np.ndarray, gaps: Gaps) -> np.ndarray:
     numpy.ndarray
         ``(N, 2) float64``: the values at the points of ``gaps.frames()``, in order.
     """
-    n_frames = uv.shape[0]
-    joint = gaps.joint
-    before = np.where(gaps.leading, gaps.stop, gaps.start - 1)
-    after = np.where(gaps.trailing, before, gaps.stop)
-    earlier, later = _outer_samples(gaps, before, after)
-    has_earlier, has_later = (earlier >= 0)[:, None], (later < n_frames)[:, None]
-    y_before, y_after = uv[before, joint], uv[after, joint]
-    y_earlier = uv[np.maximum(earlier, 0), joint]
-    y_later = uv[np.minimum(later, n_frames - 1), joint]
-    width = np.maximum(after - before, 1)[:, None]
-    h_earlier = np.maximum(before - earlier, 1)[:, None]
-    h_later = np.maximum(later - after, 1)[:, None]
-    secant = (y_after - y_before) / width
-    m_earlier = (y_before - y_earlier) / h_earlier
-    m_later = (y_later - y_after) / h_later
-    slope_before = np.where(has_earlier, _inner_slope(h_earlier, width, m_earlier, secant),
-                            np.where(has_later, _edge_slope(width, h_later, secant, m_later),
-                                     secant))
-    slope_after = np.where(has_later, _inner_slope(width, h_later, secant, m_later),
-                           np.where(has_earlier, _edge_slope(width, h_earlier, secant,
-                                                             m_earlier), secant))
-    cubic_share = (slope_before + slope_after - 2 * secant) / width
-    cubic = cubic_share / width
-    quadratic = (secant - slope_before) / width - cubic_share
-    gap, frame, _ = gaps.frames()
-    step = (frame - before[gap])[:, None].astype(np.float64)
-    value = ((cubic[gap] * step + quadratic[gap]) * step + slope_before[gap]) * step
-    value += y_before[gap]
-    edge = (gaps.leading | gaps.trailing)[gap, None]
-    return np.where(edge, y_before[gap], value)
+    return _pchip_kernel(uv, gaps.joint, gaps.start, gaps.stop)
+
+
+@kernel
+def _pchip_kernel(
+    uv: np.ndarray, joint: np.ndarray, start: np.ndarray, stop: np.ndarray
+) -> np.ndarray:
+    """:func:`_pchip_in_gaps` on the gaps' arrays, ``(G,) int64`` each.
+
+    A gap's samples: ``before`` and ``after`` bound it; ``earlier`` and ``later`` are the
+    joint's samples next to them, found from the neighbouring gaps of the joint (gaps are
+    ordered by joint, then start): the last observed frame before ``before`` (-1 if none)
+    and the first after ``after`` (``T`` if none).
+    """
+    n_frames, n_gaps = uv.shape[0], joint.size
+    values = np.empty((np.sum(stop - start), 2))
+    point = 0
+    for g in range(n_gaps):
+        leading, trailing = start[g] == 0, stop[g] == n_frames
+        before = stop[g] if leading else start[g] - 1
+        after = before if trailing else stop[g]
+        same_before = g > 0 and joint[g - 1] == joint[g]
+        same_after = g + 1 < n_gaps and joint[g + 1] == joint[g]
+        earlier = start[g - 1] - 1 if same_before and stop[g - 1] == before else before - 1
+        later = stop[g + 1] if same_after and start[g + 1] == after + 1 else after + 1
+        earlier, later = -1 if leading else earlier, n_frames if trailing else later
+        width, h_earlier = max(after - before, 1), max(before - earlier, 1)
+        h_later = max(later - after, 1)
+        for k in range(2):
+            y_before, y_after = uv[before, joint[g], k], uv[after, joint[g], k]
+            secant = (y_after - y_before) / width
+            m_earlier = (y_before - uv[max(earlier, 0), joint[g], k]) / h_earlier
+            m_later = (uv[min(later, n_frames - 1), joint[g], k] - y_after) / h_later
+            if earlier >= 0:
+                slope_before = _inner_slope(h_earlier, width, m_earlier, secant)
+            elif later < n_frames:
+                slope_before = _edge_slope(width, h_later, secant, m_later)
+            else:
+                slope_before = secant
+            if later < n_frames:
+                slope_after = _inner_slope(width, h_later, secant, m_later)
+            elif earlier >= 0:
+                slope_after = _edge_slope(width, h_earlier, secant, m_earlier)
+            else:
+                slope_after = secant
+            cubic_share = (slope_before + slope_after - 2 * secant) / width
+            cubic = cubic_share / width
+            quadratic = (secant - slope_before) / width - cubic_share
+            for frame in range(start[g], stop[g]):
+                step = float(frame - before)
+                value = ((cubic * step + quadratic) * step + slope_before) * step + y_before
+                values[point + frame - start[g], k] = y_before if leading or trailing else value
+        point += stop[g] - start[g]
+    return values
 
 
 def _curve(frames: np.ndarray, values: np.ndarray, kind: str, at: np.ndarray) -> np.ndarray:
