@@ -14,8 +14,9 @@ candidate bone in its finger's frame, numpy takes the arctangents (vectorised, s
 times faster than one at a time), the second scores the states and sums them up.
 
 Orthographically (:func:`score_mirrored_fingers`) the first kernel builds the candidate
-bones ``(dx, dy, ±|dZ|)`` from the image itself and works out palm state 0 only: state 1
-is its mirror image (``z → −z``), and a mirror, being improper, turns the palm's normal
+bones ``(dx, dy, ±|dZ|)`` from the image itself, the six distinct ones of the 14 (a bone's
+vector depends on its own sign only), and works out palm state 0 only: state 1 is its
+mirror image (``z → −z``), and a mirror, being improper, turns the palm's normal
 ``n`` into ``−M n`` (``M = diag(1, 1, −1)``) and its forward axis ``f`` into ``M f``. A
 candidate bone ``v`` of state 1 therefore rises ``v·(−M n) = −(M v)·n`` toward the palmar
 side and runs ``v·M f = (M v)·f`` ahead, where ``M v`` is the candidate with every sign
@@ -43,6 +44,15 @@ SIGN_STATES = np.array(list(itertools.product((1.0, -1.0), repeat=CHAIN_BONES)))
 
 #: Candidate bones of a finger: two first bones, four second, eight third.
 CANDIDATE_BONES = 14
+
+#: Distinct candidate bones of a finger orthographically: each bone under either sign.
+OWN_SIGN_BONES = 2 * CHAIN_BONES
+
+#: Where each of the 14 candidates (in :func:`_candidate`'s order) is among the six
+#: distinct ones orthographically, bone ``i`` with its own sign ``s`` at ``2 i + s``.
+OWN_SIGN_SLOTS = np.array([2 * bone + signs[-1]
+                           for bone in range(CHAIN_BONES)
+                           for signs in itertools.product((0, 1), repeat=bone + 1)])
 
 #: Flexion ranges of a long finger's MCP, PIP and DIP joints, degrees (flexion positive).
 LONG_FINGER_RANGE_DEG = np.array([[-30.0, 95.0], [-5.0, 115.0], [-15.0, 95.0]])
@@ -133,7 +143,8 @@ def score_fingers(candidates: FingerCandidates, bone_lengths: np.ndarray,
     base_height = np.empty((n_frames, 2, n_fingers))
     _palm_frame_components(anchors, first, second, third, HANDEDNESS[hand], palmar, ahead,
                            base_height)
-    return _score(np.arctan2(palmar, ahead), palmar, base_height, bone_lengths, layout)
+    return _score(np.arctan2(palmar, ahead), palmar, base_height, np.arange(CANDIDATE_BONES),
+                  bone_lengths, layout)
 
 
 def score_mirrored_fingers(xy: np.ndarray, abs_dz: np.ndarray, palm_z: np.ndarray,
@@ -165,24 +176,26 @@ def score_mirrored_fingers(xy: np.ndarray, abs_dz: np.ndarray, palm_z: np.ndarra
     """
     n_frames, n_fingers = len(xy), len(layout.fingers)
     parents = np.column_stack([layout.chain_bases, layout.chains[:, :-1]])
-    palmar = np.empty((n_frames, 2, n_fingers, CANDIDATE_BONES))
-    ahead = np.empty((n_frames, n_fingers, CANDIDATE_BONES))
+    palmar = np.empty((n_frames, 2, n_fingers, OWN_SIGN_BONES))
+    ahead = np.empty((n_frames, n_fingers, OWN_SIGN_BONES))
     base_height = np.empty((n_frames, 2, n_fingers))
     _mirrored_components(xy, abs_dz, palm_z, anchor_joints(layout), layout.chains, parents,
                          HANDEDNESS[hand], palmar, ahead, base_height)
     angle = np.empty(palmar.shape)
     np.arctan2(palmar[:, 0], ahead, out=angle[:, 0])
     _mirror_angles(angle)
-    return _score(angle, palmar, base_height, bone_lengths, layout)
+    return _score(angle, palmar, base_height, OWN_SIGN_SLOTS, bone_lengths, layout)
 
 
 def _score(angle: np.ndarray, palmar: np.ndarray, base_height: np.ndarray,
-           bone_lengths: np.ndarray, layout: HandLayout) -> FingerScores:
+           slots: np.ndarray, bone_lengths: np.ndarray, layout: HandLayout) -> FingerScores:
     """Score the states from the candidates in their fingers' frames.
 
-    ``angle`` ``(T, 2, F, 14)``, radians, is each candidate bone's direction in its
-    finger's plane; ``palmar`` ``(T, 2, F, 14)`` and ``base_height`` ``(T, 2, F)``, clip
+    ``angle`` ``(T, 2, F, K)``, radians, is each candidate bone's direction in its
+    finger's plane; ``palmar`` ``(T, 2, F, K)`` and ``base_height`` ``(T, 2, F)``, clip
     units, its rise toward the palmar side and the finger base's height over the palm.
+    ``slots`` ``(14,)`` says where along ``K`` each candidate (:func:`_candidate`'s order)
+    is.
     """
     thumb = layout.is_thumb
     ranges = np.radians(np.where(thumb[:, None, None], THUMB_RANGE_DEG,
@@ -193,9 +206,9 @@ def _score(angle: np.ndarray, palmar: np.ndarray, base_height: np.ndarray,
                           evidence=np.empty(base_height.shape),
                           bone_log_odds=np.empty(base_height.shape + (CHAIN_BONES,)),
                           best=np.empty(base_height.shape, dtype=np.int64))
-    _score_states(angle, palmar, base_height, ranges, np.radians(RANGE_SOFTNESS_DEG), ~thumb,
-                  margin, DORSAL_SOFTNESS * first_bone, scores.anatomy, scores.evidence,
-                  scores.bone_log_odds, scores.best)
+    _score_states(angle, palmar, base_height, slots, ranges, np.radians(RANGE_SOFTNESS_DEG),
+                  ~thumb, margin, DORSAL_SOFTNESS * first_bone, scores.anatomy,
+                  scores.evidence, scores.bone_log_odds, scores.best)
     return scores
 
 
@@ -279,8 +292,9 @@ def _mirrored_components(xy, abs_dz, palm_z, anchors, chains, parents, handednes
     ``anchors`` ``(3 + F,)`` the joints of
     :attr:`handdb.lifting.finger_geometry.FingerCandidates.anchors`, ``chains`` and
     ``parents`` ``(F, 3)`` each finger's bones below the palm. Fills ``palmar`` ``(T, 2, F,
-    14)`` and ``base_height`` ``(T, 2, F)`` for both palm states, state 1 mirrored from
-    state 0, and ``ahead`` ``(T, F, 14)`` for state 0.
+    6)`` and ``base_height`` ``(T, 2, F)`` for both palm states, state 1 mirrored from
+    state 0, and ``ahead`` ``(T, F, 6)`` for state 0; bone ``i`` with sign ``s`` is at
+    ``2 i + s`` (:data:`OWN_SIGN_SLOTS`).
     """
     n_frames, n_fingers = xy.shape[0], chains.shape[0]
     corner = np.empty((3, 3))
@@ -311,37 +325,29 @@ def _mirrored_components(xy, abs_dz, palm_z, anchors, chains, parents, handednes
             norm = math.sqrt(_dot(forward, forward))
             for k in range(3):
                 forward[k] /= norm
-            for i in range(CHAIN_BONES):        # candidates of bone i: 2^(i+1) from 2^(i+1) - 2
+            for i in range(CHAIN_BONES):
                 child, parent = chains[f, i], parents[f, i]
                 bone[0] = xy[t, child, 0] - xy[t, parent, 0]
                 bone[1] = xy[t, child, 1] - xy[t, parent, 1]
                 for sign in range(2):
                     bone[2] = abs_dz[t, child] if sign == 0 else -abs_dz[t, child]
-                    rise, run = _dot(bone, normal), _dot(bone, forward)
-                    for above in range(1 << i):
-                        index = (1 << (i + 1)) - 2 + 2 * above + sign
-                        palmar[t, 0, f, index], ahead[t, f, index] = rise, run
-                        palmar[t, 1, f, _mirrored(index)] = -rise
+                    palmar[t, 0, f, 2 * i + sign] = _dot(bone, normal)
+                    ahead[t, f, 2 * i + sign] = _dot(bone, forward)
+                    palmar[t, 1, f, 2 * i + 1 - sign] = -palmar[t, 0, f, 2 * i + sign]
 
 
 @kernel
 def _mirror_angles(angle):
-    """Fill palm state 1 of ``angle`` ``(T, 2, F, 14)`` from state 0: ``−`` the mirror's."""
+    """Fill palm state 1 of ``angle`` ``(T, 2, F, 6)`` from state 0.
+
+    Bone ``i`` with sign ``s`` is at ``2 i + s``; in state 1 its angle is minus that of
+    the same bone with the other sign in state 0.
+    """
     n_frames, _, n_fingers, n_candidates = angle.shape
     for t in range(n_frames):
         for f in range(n_fingers):
             for index in range(n_candidates):
-                angle[t, 1, f, _mirrored(index)] = -angle[t, 0, f, index]
-
-
-@kernel
-def _mirrored(index: int) -> int:
-    """Position of the candidate with every sign flipped (:func:`_candidate`'s order)."""
-    if index < 2:
-        return 1 - index
-    if index < 6:
-        return 7 - index
-    return 19 - index
+                angle[t, 1, f, index ^ 1] = -angle[t, 0, f, index]
 
 
 @kernel
@@ -362,12 +368,13 @@ def _candidate(a: int, b: int = -1, c: int = -1) -> int:
 
 
 @kernel
-def _score_states(angle, palmar, base_height, ranges, range_softness, coupled, margin,
-                  dorsal_softness, anatomy, evidence, bone_log_odds, best):
+def _score_states(angle, palmar, base_height, slots, ranges, range_softness, coupled,
+                  margin, dorsal_softness, anatomy, evidence, bone_log_odds, best):
     """Fill the arrays of a :class:`FingerScores` (see there for their shapes).
 
-    ``angle`` and ``palmar`` are ``(T, 2, F, 14)``: each candidate bone's direction in its
-    finger's plane and its rise toward the palmar side; ``base_height`` ``(T, 2, F)``.
+    ``angle`` and ``palmar`` are ``(T, 2, F, K)``: each candidate bone's direction in its
+    finger's plane and its rise toward the palmar side, candidate ``k`` (in
+    :func:`_candidate`'s order) at ``slots[k]``; ``base_height`` ``(T, 2, F)``.
     """
     ratio_sigma = math.radians(COUPLING_SIGMA_DEG)
     centre, spread = math.radians(COMFORT_CENTRE_DEG), math.radians(COMFORT_SIGMA_DEG)
@@ -378,13 +385,13 @@ def _score_states(angle, palmar, base_height, ranges, range_softness, coupled, m
         for p in range(2):
             for f in range(n_fingers):
                 for a in range(2):
-                    mcp = angle[t, p, f, _candidate(a)]
-                    knuckle = base_height[t, p, f] + palmar[t, p, f, _candidate(a)]
+                    mcp = angle[t, p, f, slots[_candidate(a)]]
+                    knuckle = base_height[t, p, f] + palmar[t, p, f, slots[_candidate(a)]]
                     cost_a = (_outside(mcp, low[f, 0], high[f, 0], range_softness)
                               + _dorsal(knuckle, margin[f], dorsal_softness[f]))
                     relaxed_a = ((mcp - centre) / spread) ** 2
                     for b in range(2):
-                        second = _candidate(a, b)
+                        second = slots[_candidate(a, b)]
                         pip = _wrap(angle[t, p, f, second] - mcp)
                         middle = knuckle + palmar[t, p, f, second]
                         cost_ab = (cost_a
@@ -392,7 +399,7 @@ def _score_states(angle, palmar, base_height, ranges, range_softness, coupled, m
                                    + _dorsal(middle, margin[f], dorsal_softness[f]))
                         relaxed_ab = relaxed_a + ((pip - centre) / spread) ** 2
                         for c in range(2):
-                            third = _candidate(a, b, c)
+                            third = slots[_candidate(a, b, c)]
                             dip = _wrap(angle[t, p, f, third] - angle[t, p, f, second])
                             end = middle + palmar[t, p, f, third]
                             cost = (cost_ab
