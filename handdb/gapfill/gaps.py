@@ -12,6 +12,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from handdb.gapfill.compiled import kernel
+
 
 @dataclass(frozen=True)
 class Gaps:
@@ -74,10 +76,23 @@ class Gaps:
         gap, frame, joint
             ``(N,) int64`` each: the gap a point belongs to, its frame and its joint.
         """
-        lengths = self.length
-        gap = np.repeat(np.arange(len(self)), lengths)
-        offset = np.arange(gap.size) - np.repeat(np.cumsum(lengths) - lengths, lengths)
-        return gap, self.start[gap] + offset, self.joint[gap]
+        return _gap_points(self.joint, self.start, self.stop)
+
+
+@kernel
+def _gap_points(
+    joint: np.ndarray, start: np.ndarray, stop: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """:meth:`Gaps.frames` of the gaps ``joint``, ``start``, ``stop``, ``(G,) int64`` each."""
+    n_points = np.sum(stop - start)
+    gap = np.empty(n_points, dtype=np.int64)
+    frame, joint_of = np.empty_like(gap), np.empty_like(gap)
+    point = 0
+    for g in range(joint.size):
+        for t in range(start[g], stop[g]):
+            gap[point], frame[point], joint_of[point] = g, t, joint[g]
+            point += 1
+    return gap, frame, joint_of
 
 
 def find_gaps(missing: np.ndarray) -> Gaps:
@@ -94,12 +109,28 @@ def find_gaps(missing: np.ndarray) -> Gaps:
         The gaps, ordered by joint, then by start frame.
     """
     missing = np.asarray(missing, dtype=bool)
+    return Gaps(*_runs(missing), int(missing.shape[0]))
+
+
+@kernel
+def _runs(missing: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The runs of true values down each column of ``missing`` ``(T, J) bool``.
+
+    Returns ``(G,) int64`` joints, starts and stops (exclusive), ordered by joint, then start.
+    """
     n_frames, n_joints = missing.shape
-    by_joint = np.zeros((n_joints, n_frames + 2), dtype=bool)
-    by_joint[:, 1:-1] = missing.T
-    # Each joint's row starts and ends unmissing, so its changes alternate start, stop.
-    joint, frame = np.divmod(np.flatnonzero(by_joint[:, 1:] != by_joint[:, :-1]), n_frames + 1)
-    return Gaps(joint[::2], frame[::2], frame[1::2], int(n_frames))
+    most = n_joints * ((n_frames + 1) // 2)
+    joint, start, stop = (np.empty(most, dtype=np.int64), np.empty(most, dtype=np.int64),
+                          np.empty(most, dtype=np.int64))
+    n_runs = 0
+    for j in range(n_joints):
+        for t in range(n_frames):
+            if missing[t, j] and (t == 0 or not missing[t - 1, j]):
+                joint[n_runs], start[n_runs] = j, t
+            if missing[t, j] and (t == n_frames - 1 or not missing[t + 1, j]):
+                stop[n_runs] = t + 1
+                n_runs += 1
+    return joint[:n_runs].copy(), start[:n_runs].copy(), stop[:n_runs].copy()
 
 
 def mask_points(mask: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
