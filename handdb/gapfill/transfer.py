@@ -204,31 +204,95 @@ def fit_maps_from_shape(
     linear, offset, kind
         As for :func:`fit_maps`.
     """
-    n_targets, n_points = weights.shape
-    n_params = 2 * n_points + 1
-    point_sets, first, set_of = np.unique(_member_bits(weights), return_index=True,
-                                          return_inverse=True)
-    probes = np.concatenate([np.zeros((1, 2 * n_points)), np.eye(2 * n_points)])
-    linear, offset, kind = fit_maps(
-        np.broadcast_to(shape, (point_sets.size * n_params, n_points, 2)),
-        np.tile(probes.reshape(n_params, n_points, 2), (point_sets.size, 1, 1)),
-        np.repeat(weights[first], n_params, axis=0), affine=affine)
-    maps = np.concatenate([linear.reshape(-1, 4), offset], axis=1)
-    maps = maps.reshape(point_sets.size, n_params, 6)
-    constant, slope = maps[:, 0], maps[:, 1:] - maps[:, :1]
-    set_of = set_of.ravel()
+    n_targets = weights.shape[0]
+    first, set_of, order, sizes = _point_sets(_member_bits(weights))
+    constant, slope, kind = _probe_maps(shape, weights[first], affine)
     flat_target = np.where(np.repeat(weights, 2, axis=1), target.reshape(n_targets, -1), 0.0)
-    if point_sets.size == 1:
+    if first.size == 1:
         fitted = flat_target @ slope[0] + constant[0]
     else:
-        order = np.argsort(set_of, kind="stable")
         by_set = flat_target[order]
-        sizes = np.bincount(set_of)
         stops = np.cumsum(sizes)
         fitted = np.empty((n_targets, 6))
         for index, (start, stop) in enumerate(zip(stops - sizes, stops, strict=True)):
             fitted[order[start:stop]] = by_set[start:stop] @ slope[index] + constant[index]
-    return fitted[:, :4].reshape(n_targets, 2, 2), fitted[:, 4:], kind[::n_params][set_of]
+    return fitted[:, :4].reshape(n_targets, 2, 2), fitted[:, 4:], kind[set_of]
+
+
+@kernel
+def _point_sets(bits: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Group fits by their set of points.
+
+    Parameters
+    ----------
+    bits
+        ``(N,) int64``: each fit's set of points (:func:`_member_bits`).
+
+    Returns
+    -------
+    first
+        ``(S,) int64``: the first fit of each distinct set, sets in ascending ``bits``.
+    set_of
+        ``(N,) int64``: the set of each fit.
+    order
+        ``(N,) int64``: the fits, set after set (in order within a set).
+    sizes
+        ``(S,) int64``: the fits of each set.
+    """
+    order = np.argsort(bits, kind="mergesort")
+    set_of = np.empty(bits.size, dtype=np.int64)
+    first, sizes = np.empty(bits.size, dtype=np.int64), np.zeros(bits.size, dtype=np.int64)
+    n_sets = 0
+    for rank in range(bits.size):
+        fit = order[rank]
+        if rank == 0 or bits[fit] != bits[order[rank - 1]]:
+            first[n_sets] = fit
+            n_sets += 1
+        set_of[fit] = n_sets - 1
+        sizes[n_sets - 1] += 1
+    return first[:n_sets].copy(), set_of, order, sizes[:n_sets].copy()
+
+
+@kernel
+def _probe_maps(
+    shape: np.ndarray, weights: np.ndarray, affine: bool
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The maps from ``shape`` as affine functions of the target, per set of points.
+
+    Parameters
+    ----------
+    shape
+        ``(K, 2) float64``: the source points.
+    weights
+        ``(S, K) bool``: the sets of points that take part.
+    affine
+        As for :func:`fit_maps`.
+
+    Returns
+    -------
+    constant
+        ``(S, 6) float64``: the map to the zero target (linear part row by row, offset).
+    slope
+        ``(S, 2 K, 6) float64``: the change of the map per unit of each flattened target
+        coordinate (the map to that unit target minus ``constant``).
+    kind
+        ``(S,) int64``: the kind of map each set allows (:func:`fit_maps`).
+    """
+    n_sets, n_points = weights.shape
+    probe = np.zeros((n_points, 2))
+    constant, slope = np.empty((n_sets, 6)), np.empty((n_sets, 2 * n_points, 6))
+    kind = np.empty(n_sets, dtype=np.int64)
+    for s in range(n_sets):
+        base, kind[s] = fit_map(shape, probe, weights[s], affine)
+        for i in range(6):
+            constant[s, i] = base[i]
+        for unit in range(2 * n_points):
+            probe[unit // 2, unit % 2] = 1.0
+            moved, _ = fit_map(shape, probe, weights[s], affine)
+            probe[unit // 2, unit % 2] = 0.0
+            for i in range(6):
+                slope[s, unit, i] = moved[i] - base[i]
+    return constant, slope, kind
 
 
 def map_points(
