@@ -154,7 +154,8 @@ def score_mirrored_fingers(xy: np.ndarray, abs_dz: np.ndarray, palm_z: np.ndarra
 
     Gives what :func:`score_fingers` gives for the candidates whose anchors have the palm
     depths ``palm_z`` in state 0 and ``−palm_z`` in state 1 and whose bones are
-    ``(dx, dy, ±|dZ|)``, bit for bit, at half the geometry (see the module docstring).
+    ``(dx, dy, ±|dZ|)``, bit for bit, working out the geometry of state 0's six distinct
+    candidate bones only (see the module docstring).
 
     Parameters
     ----------
