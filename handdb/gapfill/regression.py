@@ -265,25 +265,67 @@ def _predict_gaps(
         each gap (clipped into the clip).
     """
     target = np.searchsorted(samples.columns, gaps.joint)
-    n = np.maximum(moments[:, -1, -1], 1.0)[:, None]
-    mean = moments[:, :-1, -1] / n
-    scatter = moments[:, :-1, :-1] - n[..., None] * mean[:, :, None] * mean[:, None, :]
-    use = np.repeat(usable, 2, axis=1)
-    spread = np.where(use, np.maximum(np.sqrt(np.maximum(
-        np.diagonal(scatter, axis1=1, axis2=2), 0.0) / n), MIN_SPREAD), np.inf)
     coordinates = 2 * target[:, None] + np.arange(2)
-    gram = scatter / spread[:, :, None] / spread[:, None, :]
-    gram += (RIDGE * n)[..., None] * np.eye(use.shape[1])
-    cross = np.take_along_axis(scatter, coordinates[:, None, :], axis=2) / spread[..., None]
+    mean, spread, gram, cross = _normal_equations(moments, usable, coordinates)
     standard_weights = np.linalg.solve(gram, cross)
     # On the rows of samples.values (the centred coordinates, then 1): the standardised
     # predictors' weights, and the constant that restores the target's mean.
-    weights = np.empty((len(gaps), use.shape[1] + 1, 2))
+    weights = np.empty((len(gaps), moments.shape[1], 2))
     weights[:, :-1] = standard_weights / spread[..., None]
     weights[:, -1] = (np.take_along_axis(mean, coordinates, axis=1) + samples.centre[coordinates]
                       - (mean[:, None] @ weights[:, :-1])[:, 0])
     around = np.clip(gaps.start[:, None] - 1 + np.arange(span), 0, gaps.n_frames - 1)
     return samples.values[around] @ weights
+
+
+@kernel
+def _normal_equations(
+    moments: np.ndarray, usable: np.ndarray, coordinates: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Each gap's ridge regression on standardised predictors, as normal equations.
+
+    Parameters
+    ----------
+    moments
+        ``(G, D, D) float64``: as for :func:`_predict_gaps` (``D = 2 C + 1``).
+    usable
+        ``(G, C) bool``: each gap's predictor joints.
+    coordinates
+        ``(G, 2) int64``: the target's two coordinates among the ``2 C``.
+
+    Returns
+    -------
+    mean
+        ``(G, 2 C) float64``: the training frames' mean of each coordinate (centred).
+    spread
+        ``(G, 2 C) float64``: each predictor's standard deviation (at least
+        :data:`MIN_SPREAD`), ``inf`` for a coordinate that is not a predictor.
+    gram, cross
+        ``(G, 2 C, 2 C)`` and ``(G, 2 C, 2) float64``: the standardised predictors' scatter
+        plus :data:`RIDGE` per training frame on the diagonal, and their scatter with the
+        target.
+    """
+    n_gaps, size = moments.shape[0], moments.shape[1] - 1
+    mean, spread = np.empty((n_gaps, size)), np.empty((n_gaps, size))
+    gram, cross = np.empty((n_gaps, size, size)), np.empty((n_gaps, size, 2))
+    scatter = np.empty((size, size))
+    for g in range(n_gaps):
+        n = max(moments[g, -1, -1], 1.0)
+        for i in range(size):
+            mean[g, i] = moments[g, i, -1] / n
+        for i in range(size):
+            for j in range(size):
+                scatter[i, j] = moments[g, i, j] - n * mean[g, i] * mean[g, j]
+        for i in range(size):
+            spread[g, i] = (max(np.sqrt(max(scatter[i, i], 0.0) / n), MIN_SPREAD)
+                            if usable[g, i // 2] else np.inf)
+        for i in range(size):
+            for j in range(size):
+                gram[g, i, j] = (scatter[i, j] / spread[g, i] / spread[g, j]
+                                 + RIDGE * n * (1.0 if i == j else 0.0))
+            for k in range(2):
+                cross[g, i, k] = scatter[i, coordinates[g, k]] / spread[g, i]
+    return mean, spread, gram, cross
 
 
 def _blend_to_edges(
