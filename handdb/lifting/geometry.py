@@ -167,6 +167,25 @@ def path_matrix(skeleton: Skeleton) -> np.ndarray:
     return paths
 
 
+def path_lists(on_path: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Where each row of a boolean matrix is true, as lists a compiled loop can walk.
+
+    Parameters
+    ----------
+    on_path
+        ``(N, M) bool``, e.g. which bones lie on each joint's path (:func:`path_matrix`).
+
+    Returns
+    -------
+    indices
+        ``(N, M) int64``: row ``i``'s true columns in increasing order, then padding.
+    counts
+        ``(N,) int64``: how many columns of each row are true.
+    """
+    return (np.argsort(~on_path, axis=1, kind="stable").astype(np.int64),
+            np.count_nonzero(on_path, axis=1).astype(np.int64))
+
+
 def accumulate_depths(signed_dz: np.ndarray, skeleton: Skeleton) -> np.ndarray:
     """Walk from the root to the tips, adding each bone's signed depth to its parent's.
 
@@ -185,11 +204,7 @@ def accumulate_depths(signed_dz: np.ndarray, skeleton: Skeleton) -> np.ndarray:
         below a bone whose depth is NaN. Each joint's depth is the sum of the bones on its
         path taken in joint order (the order of the matrix product by :func:`path_matrix`).
     """
-    on_path = path_matrix(skeleton) > 0
-    lengths = on_path.sum(axis=1)
-    paths = np.zeros(on_path.shape, dtype=np.int64)
-    for joint in range(skeleton.n_joints):
-        paths[joint, : lengths[joint]] = np.flatnonzero(on_path[joint])
+    paths, lengths = path_lists(path_matrix(skeleton) > 0)
     flat = np.reshape(signed_dz, (-1, skeleton.n_joints))
     z = np.empty(flat.shape)
     _sum_paths(flat, paths, lengths, z)

@@ -13,7 +13,7 @@ import itertools
 import numpy as np
 
 from handdb.lifting.compiled import kernel
-from handdb.lifting.geometry import path_matrix
+from handdb.lifting.geometry import path_lists, path_matrix
 from handdb.lifting.hand_layout import HandLayout
 from handdb.skeletons import Skeleton
 
@@ -52,11 +52,7 @@ def palm_signs(xy: np.ndarray, abs_dz: np.ndarray, skeleton: Skeleton,
     spans = np.nan_to_num(abs_dz[:, bones])[:, None, :] * to_depth       # (T, Q, P)
     # The bones each joint's depth sums, in bone order: a sum over all of them would add
     # mostly zeros.
-    on_path = to_depth > 0
-    path_lengths = on_path.sum(axis=1)
-    paths = np.zeros(on_path.shape, dtype=np.int64)
-    for q in range(len(joints)):
-        paths[q, : path_lengths[q]] = np.flatnonzero(on_path[q])
+    paths, path_lengths = path_lists(to_depth > 0)
     best = np.empty(len(xy), dtype=np.int64)
     _best_plane_patterns(np.nan_to_num(xy[:, joints]), spans, combos, paths, path_lengths,
                          PLANE_RIDGE, best)

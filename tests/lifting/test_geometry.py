@@ -5,6 +5,8 @@ from handdb.lifting.geometry import (
     accumulate_depths,
     depth_magnitudes,
     eq6_scale,
+    path_lists,
+    path_matrix,
     projected_lengths,
 )
 from handdb.skeletons import load_skeleton
@@ -49,3 +51,10 @@ def test_depths_accumulate_from_the_root(skeleton):
     signed = np.ones((2, skeleton.n_joints))
     z = accumulate_depths(signed, skeleton)
     np.testing.assert_array_equal(z[0], skeleton.depth())
+
+
+def test_path_lists_walk_each_rows_true_columns_in_order(skeleton):
+    on_path = path_matrix(skeleton) > 0
+    indices, counts = path_lists(on_path)
+    for row in range(len(on_path)):
+        np.testing.assert_array_equal(indices[row, : counts[row]], np.flatnonzero(on_path[row]))
