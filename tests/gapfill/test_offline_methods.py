@@ -9,7 +9,8 @@ from handdb.gapfill.interpolate import interpolate_gaps
 from handdb.gapfill.lowrank import lowrank_reconstruct
 from handdb.gapfill.refine import bone_bounds, refine_bone_lengths
 from handdb.gapfill.regression import regression_fill
-from handdb.gapfill.rigid import palm_joints
+from handdb.gapfill.rest_pose import rest_pose_2d
+from handdb.gapfill.rigid import carry_along_chains, palm_joints
 from handdb.skeletons import load_skeleton
 
 
@@ -232,3 +233,20 @@ def test_refinement_by_rounds_equals_bone_by_bone(name):
     bounds = bone_bounds(uv, missing, skeleton)
     expected = _refine_bone_by_bone(uv, missing, skeleton, bounds)
     assert np.allclose(refine_bone_lengths(uv, missing, skeleton), expected, atol=1e-9)
+
+
+def test_chain_fill_is_exact_for_a_hand_moving_by_similarities(mediapipe):
+    n_frames = 80
+    t = np.linspace(0.0, 1.0, n_frames)
+    angle, scale = 1.5 * t, 1.0 + 0.5 * t
+    cos, sin = scale * np.cos(angle), scale * np.sin(angle)
+    rotation = np.stack([np.stack([cos, -sin], axis=-1), np.stack([sin, cos], axis=-1)], axis=1)
+    uv = rest_pose_2d(mediapipe) @ np.swapaxes(rotation, 1, 2) + np.stack(
+        [200 * t, 50 * t], axis=-1)[:, None]
+    missing = np.zeros((n_frames, mediapipe.n_joints), dtype=bool)
+    for name, (start, stop) in {"index_pip": (10, 40), "index_dip": (5, 50),
+                                "index_tip": (0, 30), "ring_tip": (60, 80)}.items():
+        missing[start:stop, mediapipe.index(name)] = True
+    hidden = np.where(missing[..., None], np.nan, uv)
+    filled = carry_along_chains(hidden, missing, find_gaps(missing), mediapipe)
+    assert np.allclose(filled, uv, rtol=0, atol=1e-9)
