@@ -23,8 +23,8 @@ Each filled point is labelled with the rule that filled it (``rigid``, ``pchip``
 ``validated``, ``rest-pose``).
 
 The validation's hidden runs and the real gaps are estimated together: one set of
-regression samples, their regressions in shared batches, their chain fills batched per
-depth. Only the filled points are mapped back to the image.
+regression samples, their regressions in shared batches, their chain fills by one compiled
+kernel each. Only the filled points are mapped back to the image.
 """
 
 from __future__ import annotations
