@@ -33,7 +33,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from handdb.gapfill.compiled import kernel
+from handdb.compiled import kernel
 from handdb.gapfill.gaps import Gaps, find_gaps, mask_points
 from handdb.gapfill.interpolate import interpolate_gaps
 from handdb.gapfill.lowrank import DEFAULT_VARIANCE, blend_to_edges, lowrank_reconstruct

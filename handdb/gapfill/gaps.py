@@ -12,7 +12,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from handdb.gapfill.compiled import kernel
+from handdb.compiled import kernel
 
 
 @dataclass(frozen=True)

@@ -13,7 +13,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.interpolate import CubicSpline
 
-from handdb.gapfill.compiled import kernel
+from handdb.compiled import kernel
 from handdb.gapfill.gaps import Gaps, find_gaps
 from handdb.gapfill.registry import OFFLINE, MethodOutput, register
 from handdb.skeletons import Skeleton

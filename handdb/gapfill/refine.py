@@ -14,7 +14,7 @@ from functools import cache
 
 import numpy as np
 
-from handdb.gapfill.compiled import kernel
+from handdb.compiled import kernel
 from handdb.skeletons import Skeleton
 
 #: Slack on the longest projected length a bone was observed with, as a factor.

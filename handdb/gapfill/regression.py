@@ -27,7 +27,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from handdb.gapfill.compiled import kernel
+from handdb.compiled import kernel
 from handdb.gapfill.gaps import Gaps
 
 #: Frames either side of a gap whose samples train its regression.

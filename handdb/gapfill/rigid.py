@@ -16,7 +16,7 @@ from functools import cache
 
 import numpy as np
 
-from handdb.gapfill.compiled import kernel
+from handdb.compiled import kernel
 from handdb.gapfill.gaps import Gaps, find_gaps
 from handdb.gapfill.registry import OFFLINE, MethodOutput, register
 from handdb.gapfill.rest_pose import rest_pose_2d

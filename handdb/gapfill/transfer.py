@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from handdb.gapfill.compiled import kernel
+from handdb.compiled import kernel
 
 #: Smallest ratio of the two principal spreads of the source points accepted for an
 #: affine fit (below it the points are nearly collinear and the similarity is used).

@@ -4,7 +4,7 @@ A bone of length ``l`` whose ends project ``p`` pixels apart at scale ``s`` (pix
 clip unit) spans a depth of ``|dZ| = sqrt(l² − (p / s)²)``. The sign of ``dZ`` is the
 reflective ambiguity (§3.6) and is left to the lifting methods. All functions are
 vectorised over frames (the walks over the skeleton compiled,
-:mod:`handdb.lifting.compiled`) and never modify their inputs.
+:mod:`handdb.compiled`) and never modify their inputs.
 """
 
 from __future__ import annotations
@@ -14,7 +14,7 @@ import math
 import numpy as np
 
 from handdb.clip import Camera
-from handdb.lifting.compiled import kernel
+from handdb.compiled import kernel
 from handdb.skeletons import Skeleton
 
 

@@ -8,7 +8,7 @@ plane (the plane of the finger's metacarpal and the palm normal): each joint wit
 range of motion, flexing toward the palm, the DIP about 2/3 of the PIP, no joint far
 behind the palm. Scores are log-likelihoods.
 
-The scoring runs in two compiled kernels (:mod:`handdb.lifting.compiled`) over frames,
+The scoring runs in two compiled kernels (:mod:`handdb.compiled`) over frames,
 palm states, fingers and sign states, with no temporary arrays: the first puts every
 candidate bone in its finger's frame, numpy takes the arctangents (vectorised, several
 times faster than one at a time), the second scores the states and sums them up.
@@ -33,7 +33,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from handdb.lifting.compiled import kernel
+from handdb.compiled import kernel
 from handdb.lifting.finger_geometry import FingerCandidates, anchor_joints
 from handdb.lifting.hand_layout import CHAIN_BONES, HandLayout
 from handdb.lifting.temporal import NEGLIGIBLE_NATS

@@ -44,7 +44,7 @@ from typing import Any
 import numpy as np
 
 from handdb.clip import Camera
-from handdb.lifting.compiled import kernel
+from handdb.compiled import kernel
 from handdb.lifting.finger_geometry import FingerCandidates, perspective_candidates
 from handdb.lifting.geometry import (
     accumulate_depths,

@@ -12,7 +12,7 @@ import itertools
 
 import numpy as np
 
-from handdb.lifting.compiled import kernel
+from handdb.compiled import kernel
 from handdb.lifting.geometry import path_lists, path_matrix
 from handdb.lifting.hand_layout import HandLayout
 from handdb.skeletons import Skeleton

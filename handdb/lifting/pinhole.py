@@ -20,7 +20,7 @@ import math
 import numpy as np
 
 from handdb.clip import Camera
-from handdb.lifting.compiled import kernel
+from handdb.compiled import kernel
 from handdb.lifting.geometry import dot3, intrinsics
 from handdb.lifting.temporal import smooth_scale
 from handdb.skeletons import Skeleton

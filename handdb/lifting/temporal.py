@@ -18,7 +18,7 @@ import math
 import numpy as np
 from scipy.ndimage import gaussian_filter1d, percentile_filter
 
-from handdb.lifting.compiled import kernel
+from handdb.compiled import kernel
 
 #: Frames on each side of a frame that inform its scale.
 SCALE_HALF_WINDOW = 15
