@@ -54,7 +54,7 @@ from handdb.lifting.geometry import (
     orthographic_points,
     projected_lengths,
 )
-from handdb.lifting.hand_layout import HandLayout, hand_layout
+from handdb.lifting.hand_layout import CHAIN_BONES, HandLayout, hand_layout
 from handdb.lifting.hand_prior import score_fingers, score_mirrored_fingers
 from handdb.lifting.palm import palm_signs
 from handdb.lifting.pinhole import camera_rays, estimate_root_depth, walk_rays
@@ -160,8 +160,8 @@ def resolve_signs(
     palm_odds = sign_posterior(votes.sum(axis=1, keepdims=True), palm_depths,
                                acceleration_spread(palm_depths[:, :, 0], floor))[:, 0]
     state = (palm_odds < 0).astype(np.int64)
-    chosen = np.empty(scores.bone_log_odds.shape[:1] + scores.bone_log_odds.shape[2:])
     best = np.empty((n_frames, len(layout.fingers)), dtype=np.int64)
+    chosen = np.empty(best.shape + (CHAIN_BONES,))
     mirror_gap = np.empty(best.shape)
     _pick_palm_state(scores.anatomy, scores.bone_log_odds, scores.best, state, chosen, best,
                      mirror_gap)
