@@ -13,12 +13,12 @@ import tempfile
 import time
 from pathlib import Path
 
-from handdb.bvh import export_clip_bvh
-from handdb.mesh import hand_mesh, posed_vertices
-from handdb.rotations import bone_length_array, joint_rotations
-from handdb.skeletons import load_skeleton
+from handdb.export.bvh import export_clip_bvh
+from handdb.export.mesh import hand_mesh, posed_vertices
+from handdb.export.rotations import bone_length_array, joint_rotations
+from handdb.export.usd import export_clip_usd
+from handdb.hand.skeletons import load_skeleton
 from handdb.synthetic import synthesize_clip
-from handdb.usd_export import export_clip_usd
 
 SKINNED_FRAMES = 1000
 

@@ -20,11 +20,11 @@ from pathlib import Path
 
 import numpy as np
 
-from handdb.fitting import track
-from handdb.kinematics import forward_kinematics
-from handdb.markerfit import fit_markers
-from handdb.skeleton_convert import convert_points
-from handdb.skeletons import load_skeleton
+from handdb.hand.correspondence import convert_points
+from handdb.hand.model import forward_kinematics
+from handdb.hand.skeletons import load_skeleton
+from handdb.markers.fit import fit_markers
+from handdb.markers.solve import track
 from handdb.synthetic import synthesize_clip
 
 NOISE_MM = 1.0

@@ -36,7 +36,7 @@ from handdb.gapfill.evaluate import (
     overall_rmse,
 )
 from handdb.gapfill.masks import RANDOM_GAP_FRAMES, random_gaps_mask
-from handdb.skeletons import load_skeleton
+from handdb.hand.skeletons import load_skeleton
 from handdb.synthetic.clips import synthesize_clip
 
 DHG = Path(__file__).resolve().parents[1] / ".." / "shared" / "data" / "dhg-sample"

@@ -16,10 +16,10 @@ from pathlib import Path
 
 import numpy as np
 
-from handdb.preview import write_preview_png
-from handdb.skeletons import load_skeleton
+from handdb.export.preview import write_preview_png
+from handdb.hand.skeletons import load_skeleton
 from handdb.synthetic import synthesize_clip
-from handdb.validation import comparison_chart, validation_table
+from handdb.validation.depth import comparison_chart, validation_table
 
 CLIP_FRAMES = (300, 20_000)
 REPEATS = 3

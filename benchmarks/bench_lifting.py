@@ -19,8 +19,8 @@ from concurrent.futures import ThreadPoolExecutor
 import numpy as np
 
 from handdb.clip import Camera
+from handdb.hand.skeletons import load_skeleton
 from handdb.lifting import available_methods, bone_length_array, lift
-from handdb.skeletons import load_skeleton
 from handdb.synthetic.clips import synthesize_clip
 
 LENGTHS = (400, 10_000, 100_000)

@@ -22,10 +22,10 @@ from pathlib import Path
 import numpy as np
 
 from handdb.clip import Camera
+from handdb.hand.skeletons import load_skeleton
 from handdb.lifting import available_methods, bone_length_array, lift
-from handdb.skeletons import load_skeleton
 from handdb.synthetic.clips import synthesize_clip, thesis_clench_clip
-from handdb.validation import clip_summary, joint_errors, validation_table
+from handdb.validation.depth import clip_summary, joint_errors, validation_table
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from bench_lifting import parallel_throughput, throughput_table  # noqa: E402

@@ -17,8 +17,8 @@ from pathlib import Path
 import numpy as np
 
 from handdb.clip import parse_sidecar
-from handdb.readers import dlc, maya, openpose, tracks_csv
-from handdb.skeletons import load_skeleton
+from handdb.hand.skeletons import load_skeleton
+from handdb.ingest import dlc, maya, openpose, tracks_csv
 
 SIDECAR = {"hand": "right", "fps": 30, "subject": "bench", "units": "mm",
            "camera": {"model": "orthographic"}}

@@ -3,7 +3,7 @@
 For synthetic inboxes of several sizes this prints, and saves as JSON in ``benchmarks/out/``:
 
 - frames per second of every pipeline stage (ingest, bone lengths, gap fill, lift,
-  validate, export, commit), timed by calling ``handdb.pipeline`` directly on the clips;
+  validate, export, commit), timed by calling ``handdb.build.stages`` directly on the clips;
 - the whole build (the Prefect flow, in a fresh process) against the I/O floor: pyarrow
   reading the same input CSVs and writing their rows as Parquet, nothing else; the fixed
   start-up cost (an empty build) is measured apart and subtracted;
@@ -98,8 +98,8 @@ def write_inbox(inbox: Path, n_clips: int, n_frames: int) -> int:
     under further clip ids. Returns the total number of frames.
     """
     from handdb.demo import hide_points
-    from handdb.readers import get_format
-    from handdb.skeletons import load_skeleton
+    from handdb.hand.skeletons import load_skeleton
+    from handdb.ingest import get_format
     from handdb.synthetic import synthesize_clip
 
     inbox.mkdir(parents=True, exist_ok=True)
@@ -173,9 +173,9 @@ def stage_timings(inbox: Path, db: Path) -> dict[str, Timing]:
 
     BLAS runs on one thread, as in a build (clips, not matrices, are what runs in parallel).
     """
-    from handdb import pipeline
-    from handdb.readers import discover
-    from handdb.store import Store
+    from handdb.build import stages as pipeline
+    from handdb.ingest import discover
+    from handdb.store.database import Store
 
     store = Store(str(db))
     ratios, _ = pipeline.ingest_xray([], store)
@@ -189,8 +189,8 @@ def stage_timings(inbox: Path, db: Path) -> dict[str, Timing]:
 def time_clip_stages(entry: Any, inbox: Path, store: Any, ratios: pa.Table,
                      timings: dict[str, Timing]) -> None:
     """Run one clip through every stage, adding each stage's time to ``timings``."""
-    from handdb import pipeline
-    from handdb.quarantine import Refusal
+    from handdb.build import stages as pipeline
+    from handdb.store.quarantine import Refusal
 
     options = pipeline.BuildOptions()
     with timed(timings["ingest"], 0):
@@ -320,9 +320,9 @@ def prefect_overhead(n_clips: int) -> dict:
 
 def write_query_database(db: Path, n_rows: int) -> int:
     """Write ``joints_3d`` and ``truth_3d`` of ``QUERY_CLIPS`` clips with synthetic values."""
-    from handdb import tables
-    from handdb.skeletons import load_skeleton
-    from handdb.store import Store
+    from handdb.hand.skeletons import load_skeleton
+    from handdb.store import tables
+    from handdb.store.database import Store
 
     store, skeleton = Store(str(db)), load_skeleton("mediapipe21")
     n_joints = skeleton.n_joints
@@ -352,7 +352,7 @@ def write_query_database(db: Path, n_rows: int) -> int:
 
 def query_latencies(db: Path) -> dict[str, float]:
     """Best of ``QUERY_REPEATS`` wall seconds of each query in :data:`QUERIES`."""
-    from handdb.query import connect
+    from handdb.store.query import connect
 
     con = connect(str(db))
     latencies = {}

@@ -2,11 +2,11 @@
 
 The inbox's X-ray files are read first and the joint ratios recomputed (a task); then
 each clip passes ingest → bone lengths → gap fill → lift → validate → export → commit,
-each stage a task that calls ``handdb.pipeline``. Clips whose build key is already in the
+each stage a task that calls ``handdb.build.stages``. Clips whose build key is already in the
 database are skipped (the database is the cache). Chains are submitted in windows of a few
 clips so memory is bounded by the largest clips in flight, not by the database.
 Inputs the library refuses (bad files, no bone lengths) travel down the chain as a
-:class:`~handdb.quarantine.Refusal` and end in the ``quarantine`` table; the other clips go on.
+:class:`~handdb.store.quarantine.Refusal` and end in the ``quarantine`` table; the other clips go on.
 """
 
 from __future__ import annotations
@@ -30,12 +30,15 @@ from prefect.task_runners import TaskRunner, ThreadPoolTaskRunner
 from threadpoolctl import threadpool_limits
 
 from flows.settings import shared_api
-from handdb import __version__, pipeline, progress, tables
-from handdb.quarantine import Refusal, quarantine_table
-from handdb.ratios import ratios_markdown
-from handdb.readers import InboxScan, content_hash, discover
-from handdb.store import Store
-from handdb.validation import clip_summary
+from handdb import __version__
+from handdb.build import progress
+from handdb.build import stages as pipeline
+from handdb.ingest import InboxScan, content_hash, discover
+from handdb.lengths.ratios import ratios_markdown
+from handdb.store import tables
+from handdb.store.database import Store
+from handdb.store.quarantine import Refusal, quarantine_table
+from handdb.validation.depth import clip_summary
 
 #: Clips whose task chains run at once; bounds memory and the thread pool's queue.
 WINDOW_PER_WORKER = 2

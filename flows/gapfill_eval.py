@@ -22,10 +22,10 @@ from prefect.task_runners import TaskRunner, ThreadPoolTaskRunner
 from threadpoolctl import threadpool_limits
 
 from flows.build import BLAS_THREADS, DEFAULT_WORKERS
-from handdb import tables
 from handdb.gapfill.evaluate import OCCLUSION_MASK, evaluate_clip, rmse_markdown
 from handdb.gapfill.sources import ClipSource, store_evaluation
-from handdb.store import Store
+from handdb.store import tables
+from handdb.store.database import Store
 
 
 @dataclass

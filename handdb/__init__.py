@@ -10,7 +10,7 @@ out as Parquet tables queried with DuckDB, and as USD skeletal animation.
 
 from importlib.metadata import PackageNotFoundError, version
 
-from handdb.query import connect, query
+from handdb.store.query import connect, query
 
 try:
     __version__ = version("handdb")

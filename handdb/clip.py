@@ -25,7 +25,7 @@ from typing import Any
 import numpy as np
 
 from handdb.errors import InputError, SkeletonError
-from handdb.skeletons import Skeleton, load_skeleton
+from handdb.hand.skeletons import Skeleton, load_skeleton
 
 #: A clip id: letters, digits, ``.``, ``_``, ``-``; no path separators, not ``..``.
 CLIP_ID_PATTERN = re.compile(r"^[A-Za-z0-9][A-Za-z0-9._-]{0,127}$")

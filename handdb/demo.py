@@ -21,10 +21,10 @@ import numpy as np
 from rich.console import Group
 from rich.table import Table
 
-from handdb import tables
-from handdb.readers import get_format
-from handdb.skeletons import load_skeleton
-from handdb.store import Store
+from handdb.hand.skeletons import load_skeleton
+from handdb.ingest import get_format
+from handdb.store import tables
+from handdb.store.database import Store
 from handdb.synthetic import SyntheticClip, synthesize_clip, thesis_clench_clip
 
 XRAY_SAMPLE = "chaudhry_table1.xray.csv"
@@ -179,7 +179,7 @@ def write_demo_inbox(inbox: Path) -> list[Path]:
 
 def describe_database(db: str) -> Group:
     """A summary of the database for the terminal: tables, clips, paths, a query to try."""
-    from handdb.query import query
+    from handdb.store.query import query
 
     store = Store(db)
     counts = Table("table", "rows", "files", title=f"database {store.uri()}")

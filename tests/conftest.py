@@ -41,8 +41,8 @@ N_FRAMES = 40
 def _write_clip(inbox: Path, clip_id: str, *, seed: int, fmt: str = "tracks_csv",
                 truth: bool = True) -> Path:
     """Write a short synthetic clip; return its track file."""
-    from handdb.readers import get_format
-    from handdb.skeletons import load_skeleton
+    from handdb.hand.skeletons import load_skeleton
+    from handdb.ingest import get_format
     from handdb.synthetic import synthesize_clip
 
     clip = synthesize_clip("wave", N_FRAMES, seed=seed)

@@ -1,8 +1,8 @@
 import pyarrow as pa
 
-from handdb import pipeline
-from handdb.quarantine import Refusal
-from handdb.store import Store
+from handdb.build import stages as pipeline
+from handdb.store.database import Store
+from handdb.store.quarantine import Refusal
 
 
 def test_a_refused_clip_passes_every_later_stage_unchanged(tmp_path):

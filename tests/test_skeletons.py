@@ -4,8 +4,8 @@ import numpy as np
 import pytest
 
 from handdb.errors import SkeletonError
-from handdb.skeleton_convert import convert_points, correspondence
-from handdb.skeletons import SKELETONS_DIR, available_skeletons, load_skeleton
+from handdb.hand.correspondence import convert_points, correspondence
+from handdb.hand.skeletons import SKELETONS_DIR, available_skeletons, load_skeleton
 
 MEDIAPIPE_ORDER = [
     "wrist", "thumb_cmc", "thumb_mcp", "thumb_ip", "thumb_tip",
@@ -71,7 +71,7 @@ def test_bad_topology_is_refused(tmp_path, monkeypatch):
     doc = json.loads((SKELETONS_DIR / "mediapipe21.json").read_text())
     doc["joints"][1]["parent"] = "thumb_tip"  # parent listed after the child
     (tmp_path / "broken.json").write_text(json.dumps(doc))
-    monkeypatch.setattr("handdb.skeletons.SKELETONS_DIR", tmp_path)
+    monkeypatch.setattr("handdb.hand.skeletons.SKELETONS_DIR", tmp_path)
     load_skeleton.cache_clear()
     try:
         with pytest.raises(SkeletonError, match="listed before it"):

@@ -3,10 +3,10 @@ import multiprocessing
 import pyarrow.parquet as pq
 import pytest
 
-from handdb import tables
 from handdb.errors import DatabaseLockedError, SchemaError, StoreError
-from handdb.query import connect, query
-from handdb.store import CLIP_TABLES, Store
+from handdb.store import tables
+from handdb.store.database import CLIP_TABLES, Store
+from handdb.store.query import connect, query
 
 
 def truth_rows(clip_id, n_frames, offset=0.0):

@@ -3,8 +3,8 @@ import json
 import pyarrow as pa
 import pytest
 
-from handdb import tables
 from handdb.errors import SchemaError
+from handdb.store import tables
 
 
 def test_every_contract_loads_with_docs():

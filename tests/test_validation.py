@@ -1,9 +1,9 @@
 import numpy as np
 import pytest
 
+from handdb.hand.skeletons import load_skeleton
 from handdb.lifting import LiftResult
-from handdb.skeletons import load_skeleton
-from handdb.validation import (
+from handdb.validation.depth import (
     clip_summary,
     comparison_chart,
     markdown_summary,

@@ -78,7 +78,7 @@ def run_build(inbox: str, db: str, *, gap_fill: str | None = None, lift: str | N
     The inbox and the database lock are checked before Prefect starts, so a missing inbox
     or a build already running is reported at once.
     """
-    from handdb.store import Store
+    from handdb.store.database import Store
 
     if not Path(inbox).is_dir():
         raise InputError(inbox, "is not a folder: create it and put clips in it, or pass "
@@ -88,7 +88,7 @@ def run_build(inbox: str, db: str, *, gap_fill: str | None = None, lift: str | N
 
     from flows.build import run
     from flows.settings import quick_flows
-    from handdb import progress as build_progress
+    from handdb.build import progress as build_progress
 
     columns = (TextColumn("[bold]{task.description}"), BarColumn(), MofNCompleteColumn(),
                TimeElapsedColumn())
@@ -166,7 +166,7 @@ def sql(
     """Run a SQL query against the database with DuckDB and print the result."""
     import duckdb
 
-    from handdb.query import query
+    from handdb.store.query import query
 
     try:
         result = query(db, statement)

@@ -12,9 +12,9 @@ from typing import Annotated
 import typer
 
 from handdb.errors import HanddbError
-from handdb.exports import BVH_SUFFIX, export_stored_clip
+from handdb.export.stored import BVH_SUFFIX, export_stored_clip
+from handdb.export.usd import LAYER_SUFFIXES, USDZ_SUFFIX
 from handdb.paths import DEFAULT_DB
-from handdb.usd_export import LAYER_SUFFIXES, USDZ_SUFFIX
 
 app = typer.Typer(add_completion=False, no_args_is_help=True)
 

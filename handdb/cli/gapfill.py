@@ -29,9 +29,9 @@ from handdb.gapfill.sources import (
     SyntheticSource,
     database_sources,
 )
+from handdb.ingest.inbox import discover
 from handdb.paths import default_db
-from handdb.readers.inbox import discover
-from handdb.store import Store
+from handdb.store.database import Store
 
 app = typer.Typer(name="gapfill", no_args_is_help=True)
 out = Console()

@@ -19,11 +19,11 @@ from rich.table import Table
 
 from handdb.clip import Camera
 from handdb.errors import InputError
+from handdb.hand.skeletons import Skeleton, load_skeleton
+from handdb.ingest.inbox import discover, load_clip
 from handdb.lifting import available_methods, bone_length_array, lift
-from handdb.readers.inbox import discover, load_clip
-from handdb.skeletons import Skeleton, load_skeleton
 from handdb.synthetic.clips import synthesize_clip, thesis_clench_clip
-from handdb.validation import clip_summary, comparison_chart, validation_table
+from handdb.validation.depth import clip_summary, comparison_chart, validation_table
 
 app = typer.Typer(name="lift", no_args_is_help=True)
 out = Console()

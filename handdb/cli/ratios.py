@@ -14,16 +14,16 @@ import typer
 from rich.console import Console
 from rich.table import Table
 
-from handdb.paths import DEFAULT_DB
-from handdb.ratios import (
+from handdb.ingest.xray import SEGMENTS
+from handdb.lengths.ratios import (
     ALL_COHORT,
     joint_ratios,
     paper_discrepancies,
     place_joints,
     table1_measurements,
 )
-from handdb.store import Store
-from handdb.xray import SEGMENTS
+from handdb.paths import DEFAULT_DB
+from handdb.store.database import Store
 
 app = typer.Typer(name="ratios", help="Relative phalanx lengths from X-ray images and "
                   "joint placement (Chaudhry et al.).", no_args_is_help=True)

@@ -42,7 +42,7 @@ from handdb.gapfill.refine import refine_bone_lengths
 from handdb.gapfill.registry import OFFLINE, MethodOutput, register
 from handdb.gapfill.regression import regression_estimates, regression_samples
 from handdb.gapfill.rigid import carry_along_chains_many, palm_joints, place_from_rest_pose
-from handdb.skeletons import Skeleton
+from handdb.hand.skeletons import Skeleton
 
 #: Longest interior gap (frames) bridged by interpolation rather than by the other joints.
 SHORT_GAP = 8

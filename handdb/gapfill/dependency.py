@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from handdb.skeletons import FINGERS, Skeleton
+from handdb.hand.skeletons import FINGERS, Skeleton
 
 #: Fingers whose joints have an interfinger neighbour, from the thumb side.
 LONG_FINGERS: tuple[str, ...] = FINGERS[1:]

@@ -27,7 +27,6 @@ import pyarrow as pa
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
-from handdb import tables
 from handdb.gapfill.masks import (
     RANDOM_GAPS,
     THESIS_CLIP_FRAMES,
@@ -35,7 +34,8 @@ from handdb.gapfill.masks import (
     thesis_table_4_2_mask,
 )
 from handdb.gapfill.registry import METHODS, fill_gaps
-from handdb.skeletons import Skeleton
+from handdb.hand.skeletons import Skeleton
+from handdb.store import tables
 
 #: Mask names.
 THESIS_MASK = "thesis-table-4.2"

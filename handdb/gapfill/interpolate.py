@@ -16,7 +16,7 @@ from scipy.interpolate import CubicSpline
 from handdb.compiled import kernel
 from handdb.gapfill.gaps import Gaps, find_gaps
 from handdb.gapfill.registry import OFFLINE, MethodOutput, register
-from handdb.skeletons import Skeleton
+from handdb.hand.skeletons import Skeleton
 
 #: Interpolation kinds.
 KINDS = ("linear", "cubic", "pchip")

@@ -24,7 +24,7 @@ from handdb.gapfill.gaps import Gaps, find_gaps
 from handdb.gapfill.interpolate import interpolate_gaps
 from handdb.gapfill.registry import OFFLINE, MethodOutput, register
 from handdb.gapfill.rigid import place_from_rest_pose
-from handdb.skeletons import Skeleton
+from handdb.hand.skeletons import Skeleton
 
 #: Share of the variance of the normalised trajectories the components keep.
 DEFAULT_VARIANCE = 0.995

@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from handdb.skeletons import Skeleton, load_skeleton
+from handdb.hand.skeletons import Skeleton, load_skeleton
 
 #: Frames of the thesis's clip, and of each clip Table 4.2 applies to.
 THESIS_CLIP_FRAMES = 100

@@ -1,6 +1,6 @@
 """Occlusion masks: the points the hand itself hides from the camera.
 
-The hand's 3D joints pose the skinned capsule mesh of :mod:`handdb.mesh`; from each joint a
+The hand's 3D joints pose the skinned capsule mesh of :mod:`handdb.export.mesh`; from each joint a
 ray is cast toward the camera (orthographic: along ``-z`` of the camera frame, toward the
 viewer) with trimesh. The joint is hidden when the ray meets the surface of a part of the
 hand other than its own: the bones that end or start at it (and the palm, for the palm's
@@ -11,8 +11,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from handdb.mesh import hand_mesh, posed_vertices
-from handdb.skeletons import Skeleton
+from handdb.export.mesh import hand_mesh, posed_vertices
+from handdb.hand.skeletons import Skeleton
 
 #: Direction from a joint toward an orthographic camera, camera frame.
 TOWARD_CAMERA = np.array([0.0, 0.0, -1.0])

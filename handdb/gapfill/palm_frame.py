@@ -27,7 +27,7 @@ from handdb.gapfill.transfer import (
     fit_maps_from_shape,
     inverse_2x2,
 )
-from handdb.skeletons import Skeleton
+from handdb.hand.skeletons import Skeleton
 
 
 @dataclass(frozen=True)

@@ -15,7 +15,7 @@ from functools import cache
 import numpy as np
 
 from handdb.compiled import kernel
-from handdb.skeletons import Skeleton
+from handdb.hand.skeletons import Skeleton
 
 #: Slack on the longest projected length a bone was observed with, as a factor.
 LENGTH_SLACK = 1.05

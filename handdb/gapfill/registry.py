@@ -17,7 +17,7 @@ import numpy as np
 
 from handdb.errors import HanddbError
 from handdb.gapfill.gaps import find_gaps, mask_points
-from handdb.skeletons import Skeleton
+from handdb.hand.skeletons import Skeleton
 
 #: Flag kinds. A gap at the start of the clip (the joint is missing in the first frame).
 LEADING = "leading"

@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 
 from handdb.errors import SkeletonError
-from handdb.skeletons import Skeleton
+from handdb.hand.skeletons import Skeleton
 
 #: Canonical joint name -> (x, y) of the open right hand, palm towards the camera.
 REST_POSE_2D: dict[str, tuple[float, float]] = {

@@ -21,7 +21,7 @@ from handdb.gapfill.gaps import Gaps, find_gaps
 from handdb.gapfill.registry import OFFLINE, MethodOutput, register
 from handdb.gapfill.rest_pose import rest_pose_2d
 from handdb.gapfill.transfer import NO_MAP, fit_map, map_points
-from handdb.skeletons import Skeleton
+from handdb.hand.skeletons import Skeleton
 
 #: Roles of the joints that move with the palm.
 PALM_ROLES = frozenset({"wrist", "palm_fold", "palm_center", "cmc", "mcp"})

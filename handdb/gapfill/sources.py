@@ -24,9 +24,9 @@ import pyarrow as pa
 from handdb.errors import InputError
 from handdb.gapfill.evaluate import Evaluation, plot_masks
 from handdb.gapfill.registry import DEFAULT_METHOD, METHODS, THESIS
-from handdb.readers.inbox import ClipEntry, load_clip
-from handdb.skeletons import Skeleton, load_skeleton
-from handdb.store import Store
+from handdb.hand.skeletons import Skeleton, load_skeleton
+from handdb.ingest.inbox import ClipEntry, load_clip
+from handdb.store.database import Store
 
 #: Table of the evaluation's rows.
 EVAL_TABLE = "gapfill_eval"

@@ -43,7 +43,7 @@ from handdb.gapfill.dependency import interfinger_neighbours, intrafinger_parent
 from handdb.gapfill.gaps import find_gaps
 from handdb.gapfill.registry import SHORT_HISTORY, THESIS, GapFlag, MethodOutput, register
 from handdb.gapfill.rigid import carry_across_gaps, palm_joints, place_from_rest_pose
-from handdb.skeletons import Skeleton
+from handdb.hand.skeletons import Skeleton
 
 #: A rule predicts frame ``t`` of ``joints`` from the filled track before ``t``, given
 #: the joints they depend on: ``rule(track, t, joints, dependency) -> (K, 2)``.

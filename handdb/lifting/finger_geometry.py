@@ -18,7 +18,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from handdb.lifting.hand_layout import HandLayout
+from handdb.hand.layout import HandLayout
 from handdb.lifting.pinhole import ray_roots
 
 

@@ -15,7 +15,7 @@ import numpy as np
 
 from handdb.clip import Camera
 from handdb.compiled import kernel
-from handdb.skeletons import Skeleton
+from handdb.hand.skeletons import Skeleton
 
 
 def dot3(a: np.ndarray, b: np.ndarray) -> np.ndarray:

@@ -34,8 +34,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from handdb.compiled import kernel
+from handdb.hand.layout import CHAIN_BONES, HandLayout
 from handdb.lifting.finger_geometry import FingerCandidates, anchor_joints
-from handdb.lifting.hand_layout import CHAIN_BONES, HandLayout
 from handdb.lifting.temporal import NEGLIGIBLE_NATS
 
 #: Every sign pattern of a finger's three bones, ``(8, 3)``; row ``k`` has bit ``b`` of

@@ -45,6 +45,8 @@ import numpy as np
 
 from handdb.clip import Camera
 from handdb.compiled import kernel
+from handdb.hand.layout import CHAIN_BONES, HandLayout, hand_layout
+from handdb.hand.skeletons import Skeleton
 from handdb.lifting.finger_geometry import FingerCandidates, perspective_candidates
 from handdb.lifting.geometry import (
     accumulate_depths,
@@ -54,14 +56,12 @@ from handdb.lifting.geometry import (
     orthographic_points,
     projected_lengths,
 )
-from handdb.lifting.hand_layout import CHAIN_BONES, HandLayout, hand_layout
 from handdb.lifting.hand_prior import score_fingers, score_mirrored_fingers
 from handdb.lifting.palm import palm_signs
 from handdb.lifting.pinhole import camera_rays, estimate_root_depth, walk_rays
 from handdb.lifting.registry import register
 from handdb.lifting.result import LiftResult
 from handdb.lifting.temporal import acceleration_spread, sigmoid, sign_posterior, smooth_scale
-from handdb.skeletons import Skeleton
 
 #: The scale of a frame lets its most stretched bone be an outlier (see
 #: :func:`handdb.lifting.geometry.eq6_scale`): trackers' bones vary in length.

@@ -23,8 +23,8 @@ from scipy.optimize import least_squares
 from scipy.spatial.transform import Rotation
 
 from handdb.clip import Camera
-from handdb.fitting import MARKER_WEIGHT, MAX_EVALUATIONS, SMOOTHNESS_WEIGHT, SOLVER_TOLERANCE
-from handdb.kinematics import (
+from handdb.hand.correspondence import convert_points
+from handdb.hand.model import (
     AXES,
     N_DOF,
     ROOT_POSITION,
@@ -33,10 +33,10 @@ from handdb.kinematics import (
     build_hand_model,
     forward_kinematics,
 )
+from handdb.hand.skeletons import Skeleton, load_skeleton
 from handdb.lifting.registry import register
 from handdb.lifting.result import LiftResult
-from handdb.skeleton_convert import convert_points
-from handdb.skeletons import Skeleton, load_skeleton
+from handdb.markers.solve import MARKER_WEIGHT, MAX_EVALUATIONS, SMOOTHNESS_WEIGHT, SOLVER_TOLERANCE
 
 #: Name of the method in the lifting registry.
 METHOD = "model-fit"

@@ -13,9 +13,9 @@ import itertools
 import numpy as np
 
 from handdb.compiled import kernel
+from handdb.hand.layout import HandLayout
+from handdb.hand.skeletons import Skeleton
 from handdb.lifting.geometry import path_lists, path_matrix
-from handdb.lifting.hand_layout import HandLayout
-from handdb.skeletons import Skeleton
 
 #: Ridge added to the palm plane's normal equations (clip units²) so that a palm seen
 #: edge-on, its joints on one image line, still has a plane.

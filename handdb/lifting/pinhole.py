@@ -21,9 +21,9 @@ import numpy as np
 
 from handdb.clip import Camera
 from handdb.compiled import kernel
+from handdb.hand.skeletons import Skeleton
 from handdb.lifting.geometry import dot3, intrinsics
 from handdb.lifting.temporal import smooth_scale
-from handdb.skeletons import Skeleton
 
 #: The root depth is searched within these factors of the weak-perspective guess.
 DEPTH_BRACKET = (0.5, 3.0)

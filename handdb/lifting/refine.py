@@ -27,11 +27,11 @@ from scipy.optimize import least_squares
 from scipy.sparse import coo_matrix
 
 from handdb.clip import Camera
+from handdb.hand.skeletons import Skeleton
 from handdb.lifting.kinematic import lift_kinematic
 from handdb.lifting.pinhole import camera_rays
 from handdb.lifting.registry import register
 from handdb.lifting.result import LiftResult
-from handdb.skeletons import Skeleton
 
 #: Weight of a joint's acceleration (clip units per frame²) against a bone's length error.
 SMOOTHNESS_WEIGHT = 0.02

@@ -9,8 +9,8 @@ import numpy as np
 
 from handdb.clip import HANDS, Camera
 from handdb.errors import BoneLengthError
+from handdb.hand.skeletons import Skeleton
 from handdb.lifting.result import LiftResult
-from handdb.skeletons import Skeleton
 
 #: Method used when a clip's sidecar names none.
 DEFAULT_METHOD = "kinematic"

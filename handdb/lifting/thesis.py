@@ -26,6 +26,7 @@ from typing import Any
 import numpy as np
 
 from handdb.clip import Camera
+from handdb.hand.skeletons import Skeleton
 from handdb.lifting.geometry import (
     accumulate_depths,
     centred_pixels,
@@ -36,7 +37,6 @@ from handdb.lifting.geometry import (
 )
 from handdb.lifting.registry import register
 from handdb.lifting.result import LiftResult
-from handdb.skeletons import Skeleton
 
 #: The thesis's positive depth direction in handdb's camera frame (toward the camera).
 THESIS_POSITIVE_Z = -1.0

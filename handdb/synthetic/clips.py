@@ -15,9 +15,9 @@ from typing import Any
 import numpy as np
 import pyarrow as pa
 
-from handdb import tables
 from handdb.clip import Camera, Clip, ClipSpec
-from handdb.skeletons import load_skeleton
+from handdb.hand.skeletons import load_skeleton
+from handdb.store import tables
 from handdb.synthetic.hand_model import (
     DEFAULT_HAND_LENGTH_MM,
     HandModel,

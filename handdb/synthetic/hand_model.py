@@ -17,10 +17,10 @@ Where the numbers come from
 ---------------------------
 * Metacarpal and total finger lengths as fractions of hand length (wrist crease to the tip
   of the middle finger) follow the link-length proportions of Buchholz, Armstrong &
-  Goldstein (1992), *Ergonomics* 35(3) (:data:`handdb.anthropometry.BUCHHOLZ_1992`).
+  Goldstein (1992), *Ergonomics* 35(3) (:data:`handdb.hand.anthropometry.BUCHHOLZ_1992`).
 * The split of a finger's length among its phalanges follows the X-ray measurements of
   Chaudhry, You, Jin & Zhang (seed document ``002``, Table 1, shipped as
-  :func:`handdb.ratios.table1_measurements`): the average hand has the mean relative
+  :func:`handdb.lengths.ratios.table1_measurements`): the average hand has the mean relative
   length of each phalanx over the five X-ray hands, a sampled subject a random mixture
   of the five.
 * The layout of the carpometacarpal joints and the resting splay of the rays are
@@ -36,10 +36,10 @@ from functools import cache
 import numpy as np
 import pyarrow.compute as pc
 
-from handdb.anthropometry import BUCHHOLZ_1992
 from handdb.errors import BoneLengthError, SkeletonError
-from handdb.ratios import relative_lengths, table1_measurements
-from handdb.skeletons import FINGERS, Skeleton, load_skeleton
+from handdb.hand.anthropometry import BUCHHOLZ_1992
+from handdb.hand.skeletons import FINGERS, Skeleton, load_skeleton
+from handdb.lengths.ratios import relative_lengths, table1_measurements
 
 #: Hand length (wrist crease to middle fingertip) of an average adult, mm.
 DEFAULT_HAND_LENGTH_MM = 185.0

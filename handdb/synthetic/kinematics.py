@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from handdb.skeletons import FINGERS
+from handdb.hand.skeletons import FINGERS
 from handdb.synthetic.hand_model import HandModel, mirror_sign
 
 THUMB_ANGLES: tuple[str, ...] = (

@@ -9,9 +9,9 @@ import pyarrow.csv as pa_csv
 import pyarrow.parquet as pq
 import pytest
 
-from handdb import pipeline
-from handdb.readers import discover
-from handdb.store import Store
+from handdb.build import stages as pipeline
+from handdb.ingest import discover
+from handdb.store.database import Store
 
 RUN_PY = Path(__file__).resolve().parents[2] / "benchmarks" / "run.py"
 

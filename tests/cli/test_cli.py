@@ -7,9 +7,9 @@ import json
 import pytest
 from typer.testing import CliRunner
 
-from handdb import tables
 from handdb.cli import EXIT_QUARANTINED, app
-from handdb.store import Store
+from handdb.store import tables
+from handdb.store.database import Store
 
 runner = CliRunner()
 

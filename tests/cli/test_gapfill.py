@@ -4,9 +4,9 @@ import pyarrow.parquet as pq
 from typer.testing import CliRunner
 
 from handdb.cli.gapfill import app
-from handdb.readers import tracks_csv, truth_csv
-from handdb.skeletons import load_skeleton
-from handdb.store import Store
+from handdb.hand.skeletons import load_skeleton
+from handdb.ingest import tracks_csv, truth_csv
+from handdb.store.database import Store
 from handdb.synthetic.clips import synthesize_clip
 
 

@@ -16,8 +16,8 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from handdb.rotations import rest_positions
-from handdb.skeletons import Skeleton, load_skeleton
+from handdb.export.rotations import rest_positions
+from handdb.hand.skeletons import Skeleton, load_skeleton
 
 #: Typical bone lengths of an adult hand by role of the bone's child joint, mm.
 LENGTHS_BY_ROLE = {"cmc": 35.0, "mcp": 70.0, "pip": 42.0, "dip": 25.0, "ip": 30.0,

@@ -10,9 +10,9 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 from handdb.clip import METERS_PER_UNIT
-from handdb.rotations import CAMERA_TO_Y_UP
-from handdb.skeletons import load_skeleton
-from handdb.usd_export import export_clip_usd
+from handdb.export.rotations import CAMERA_TO_Y_UP
+from handdb.export.usd import export_clip_usd
+from handdb.hand.skeletons import load_skeleton
 
 from .conftest import make_hinge_motion
 

@@ -2,9 +2,9 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from handdb.bvh import export_clip_bvh
-from handdb.rotations import CAMERA_TO_Y_UP
-from handdb.skeletons import load_skeleton
+from handdb.export.bvh import export_clip_bvh
+from handdb.export.rotations import CAMERA_TO_Y_UP
+from handdb.hand.skeletons import load_skeleton
 
 from .conftest import make_hinge_motion
 

@@ -5,12 +5,12 @@ import pyarrow as pa
 import pytest
 from typer.testing import CliRunner
 
-from handdb import tables
 from handdb.cli.export import app
-from handdb.exports import read_stored_motion
-from handdb.rotations import CAMERA_TO_Y_UP
-from handdb.skeletons import load_skeleton
-from handdb.store import Store
+from handdb.export.rotations import CAMERA_TO_Y_UP
+from handdb.export.stored import read_stored_motion
+from handdb.hand.skeletons import load_skeleton
+from handdb.store import tables
+from handdb.store.database import Store
 
 from .conftest import make_hinge_motion
 from .test_bvh import bvh_positions, parse_bvh

@@ -1,9 +1,9 @@
 import numpy as np
 import pytest
 
-from handdb.mesh import hand_mesh, posed_hand_mesh, posed_vertices
-from handdb.rotations import rest_positions
-from handdb.skeletons import load_skeleton
+from handdb.export.mesh import hand_mesh, posed_hand_mesh, posed_vertices
+from handdb.export.rotations import rest_positions
+from handdb.hand.skeletons import load_skeleton
 
 from .conftest import make_hinge_motion
 

@@ -1,8 +1,8 @@
 import numpy as np
 from matplotlib.image import imread
 
-from handdb.preview import preview_frames, write_preview_png
-from handdb.skeletons import load_skeleton
+from handdb.export.preview import preview_frames, write_preview_png
+from handdb.hand.skeletons import load_skeleton
 
 from .conftest import make_hinge_motion
 

@@ -5,10 +5,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from handdb.mesh import hand_mesh, posed_vertices
-from handdb.rotations import CAMERA_TO_Y_UP, forward_kinematics, joint_rotations
-from handdb.skeletons import load_skeleton
-from handdb.usd_export import export_clip_usd
+from handdb.export.mesh import hand_mesh, posed_vertices
+from handdb.export.rotations import CAMERA_TO_Y_UP, forward_kinematics, joint_rotations
+from handdb.export.usd import export_clip_usd
+from handdb.hand.skeletons import load_skeleton
 
 from .usd_reading import joint_world_positions, open_skeleton, validation_errors
 

@@ -3,14 +3,14 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 from handdb.errors import BoneLengthError
-from handdb.rotations import (
+from handdb.export.rotations import (
     bone_length_array,
     forward_kinematics,
     joint_rotations,
     rest_pose,
     rest_positions,
 )
-from handdb.skeletons import load_skeleton
+from handdb.hand.skeletons import load_skeleton
 
 from .conftest import make_hinge_motion
 

@@ -4,15 +4,15 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from handdb.rotations import (
+from handdb.export.rotations import (
     CAMERA_TO_Y_UP,
     bone_length_array,
     forward_kinematics,
     joint_rotations,
 )
-from handdb.skeletons import load_skeleton
+from handdb.export.usd import export_clip_usd
+from handdb.hand.skeletons import load_skeleton
 from handdb.synthetic import synthesize_clip
-from handdb.usd_export import export_clip_usd
 
 from .usd_reading import joint_world_positions, open_skeleton
 

@@ -7,9 +7,9 @@ from io import BytesIO
 import numpy as np
 from matplotlib.image import imread
 
-from handdb.preview import write_preview_png
-from handdb.skeletons import load_skeleton
-from handdb.validation import comparison_chart, validation_table
+from handdb.export.preview import write_preview_png
+from handdb.hand.skeletons import load_skeleton
+from handdb.validation.depth import comparison_chart, validation_table
 
 from .conftest import make_hinge_motion
 

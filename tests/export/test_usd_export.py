@@ -4,10 +4,10 @@ from pxr import Usd, UsdGeom, UsdSkel
 
 from handdb.clip import METERS_PER_UNIT
 from handdb.errors import StageError
-from handdb.mesh import hand_mesh, posed_vertices
-from handdb.rotations import CAMERA_TO_Y_UP, rest_pose, rest_positions
-from handdb.skeletons import load_skeleton
-from handdb.usd_export import export_clip_usd, joint_paths
+from handdb.export.mesh import hand_mesh, posed_vertices
+from handdb.export.rotations import CAMERA_TO_Y_UP, rest_pose, rest_positions
+from handdb.export.usd import export_clip_usd, joint_paths
+from handdb.hand.skeletons import load_skeleton
 
 from .conftest import make_hinge_motion
 from .usd_reading import joint_world_positions, open_skeleton, validation_errors

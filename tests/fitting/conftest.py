@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from handdb.kinematics import N_DOF, HandModel, build_hand_model
+from handdb.hand.model import N_DOF, HandModel, build_hand_model
 
 
 def perturbed_hand(model: HandModel, seed: int) -> HandModel:

@@ -1,16 +1,16 @@
 import numpy as np
 import pytest
 
-from handdb import tables
-from handdb.bone_lengths import bone_lengths_table
-from handdb.kinematics import forward_kinematics
-from handdb.subject_calibration import (
+from handdb.hand.model import forward_kinematics
+from handdb.lengths.bone_lengths import bone_lengths_table
+from handdb.markers.calibration import (
     CALIBRATED_SOURCE,
     calibrate,
     calibrated_bone_lengths,
     measured_lengths,
     select_frames,
 )
+from handdb.store import tables
 
 from .conftest import smooth_poses
 

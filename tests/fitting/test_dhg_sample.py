@@ -3,9 +3,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from handdb.markerfit import fit_markers
-from handdb.skeleton_convert import convert_points
-from handdb.skeletons import load_skeleton
+from handdb.hand.correspondence import convert_points
+from handdb.hand.skeletons import load_skeleton
+from handdb.markers.fit import fit_markers
 
 DHG = Path(__file__).resolve().parents[2] / ".." / "shared" / "data" / "dhg-sample"
 

@@ -1,7 +1,8 @@
 import numpy as np
 import pytest
 
-from handdb.fitting import (
+from handdb.hand.model import N_DOF, forward_kinematics
+from handdb.markers.solve import (
     MARKER_CUTOFF_MM,
     SwarmSettings,
     constriction_factor,
@@ -15,7 +16,6 @@ from handdb.fitting import (
     refine_poses,
     track,
 )
-from handdb.kinematics import N_DOF, forward_kinematics
 
 from .conftest import smooth_poses
 

@@ -2,7 +2,7 @@ import numpy as np
 import pytest
 
 from handdb.errors import SkeletonError
-from handdb.kinematics import (
+from handdb.hand.model import (
     AXES,
     N_DOF,
     build_hand_model,

@@ -1,8 +1,9 @@
 import numpy as np
 import pytest
 
-from handdb.kinematics import forward_kinematics
-from handdb.markerfit import (
+from handdb.export.rotations import forward_kinematics as motion_positions
+from handdb.hand.model import forward_kinematics
+from handdb.markers.fit import (
     ROOT_AXES,
     fit_markers,
     joint_angles_table,
@@ -10,8 +11,7 @@ from handdb.markerfit import (
     joints_3d_table,
     key_frames,
 )
-from handdb.rotations import forward_kinematics as motion_positions
-from handdb.tables import schema
+from handdb.store.tables import schema
 
 from .conftest import smooth_poses
 

@@ -6,8 +6,8 @@ import pytest
 
 from flows.build import run
 from flows.settings import quick_flows
-from handdb.query import query
-from handdb.store import Store
+from handdb.store.database import Store
+from handdb.store.query import query
 
 
 def build(inbox, db):

@@ -28,8 +28,8 @@ import pytest
 
 from flows.build import run
 from flows.settings import quick_flows
-from handdb.query import query
-from handdb.store import LOCK_FILE
+from handdb.store.database import LOCK_FILE
+from handdb.store.query import query
 
 pytestmark = pytest.mark.slow
 

@@ -8,7 +8,7 @@ from distributed.diagnostics.plugin import SchedulerPlugin
 
 from flows.build import run
 from flows.settings import quick_flows
-from handdb.query import query
+from handdb.store.query import query
 
 pytestmark = pytest.mark.slow
 

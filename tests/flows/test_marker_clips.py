@@ -7,10 +7,10 @@ import pytest
 
 from flows.build import run
 from flows.settings import quick_flows
-from handdb.query import query
-from handdb.readers import get_format
-from handdb.rotations import CAMERA_TO_Y_UP
-from handdb.skeletons import load_skeleton
+from handdb.export.rotations import CAMERA_TO_Y_UP
+from handdb.hand.skeletons import load_skeleton
+from handdb.ingest import get_format
+from handdb.store.query import query
 from handdb.synthetic import synthesize_clip
 from tests.export.usd_reading import joint_world_positions, open_skeleton
 

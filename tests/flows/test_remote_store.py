@@ -17,7 +17,7 @@ import handdb
 from flows.build import run
 from flows.settings import quick_flows
 from handdb.errors import DatabaseLockedError
-from handdb.store import LOCK_FILE, Store
+from handdb.store.database import LOCK_FILE, Store
 
 
 def build(inbox: Path, db: str):

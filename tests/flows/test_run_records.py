@@ -9,7 +9,7 @@ from flows.build import artifact_key, run
 from flows.settings import quick_flows
 from handdb import __version__
 from handdb.lifting import DEFAULT_METHOD as DEFAULT_LIFT
-from handdb.query import query
+from handdb.store.query import query
 
 
 def markdown_artifacts(key: str) -> list[str]:

@@ -10,7 +10,7 @@ from pathlib import Path
 
 import pytest
 
-from handdb.query import query
+from handdb.store.query import query
 
 pytestmark = pytest.mark.slow
 

@@ -2,7 +2,7 @@
 
 from flows.build import run, summary_markdown
 from flows.settings import quick_flows
-from handdb.query import query
+from handdb.store.query import query
 
 
 def test_a_failed_export_fails_its_clip_and_the_others_are_committed(inbox, tmp_path):

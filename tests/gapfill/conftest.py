@@ -3,7 +3,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from handdb.skeletons import load_skeleton
+from handdb.hand.skeletons import load_skeleton
 from handdb.synthetic.clips import synthesize_clip
 
 DHG_DIR = Path(__file__).resolve().parents[2] / ".." / "shared" / "data" / "dhg-sample"
@@ -42,10 +42,10 @@ DEMO_DB_CLIPS = ("rapid-s01", "wave-s02")
 @pytest.fixture(scope="session")
 def demo_db(tmp_path_factory):
     """A database holding two demo clips, built by the pipeline's own stages (no flow)."""
-    from handdb import pipeline
+    from handdb.build import stages as pipeline
     from handdb.demo import write_demo_inbox
-    from handdb.readers import discover
-    from handdb.store import Store
+    from handdb.ingest import discover
+    from handdb.store.database import Store
 
     root = tmp_path_factory.mktemp("gapfill-db")
     inbox = root / "inbox"

@@ -1,7 +1,7 @@
 import numpy as np
 
 from handdb.gapfill.dependency import interfinger_neighbours, intrafinger_parents
-from handdb.skeletons import load_skeleton
+from handdb.hand.skeletons import load_skeleton
 
 # The thesis program's maps, by feature point id (the lead's reading of appendix B).
 THESIS_INTERFINGER = {

@@ -5,7 +5,7 @@ from flows.settings import quick_flows
 from handdb.cli.gapfill import app
 from handdb.gapfill.evaluate import RANDOM_MASK, THESIS_MASK, pooled_rmse
 from handdb.gapfill.sources import DatabaseSource, SyntheticSource
-from handdb.store import Store
+from handdb.store.database import Store
 
 
 def test_the_flow_scores_each_clip_and_skips_incomplete_tracks(demo_db, tmp_path):

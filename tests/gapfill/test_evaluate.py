@@ -1,7 +1,6 @@
 import numpy as np
 import pytest
 
-from handdb import tables
 from handdb.gapfill import THESIS, fill_gaps, method_names
 from handdb.gapfill.evaluate import (
     RANDOM_MASK,
@@ -13,7 +12,8 @@ from handdb.gapfill.evaluate import (
 from handdb.gapfill.gaps import find_gaps
 from handdb.gapfill.masks import THESIS_TABLE_4_2, random_gaps_mask, thesis_table_4_2_mask
 from handdb.gapfill.occlusion import occlusion_mask
-from handdb.skeletons import load_skeleton
+from handdb.hand.skeletons import load_skeleton
+from handdb.store import tables
 from handdb.synthetic.clips import synthesize_clip
 
 

@@ -11,7 +11,7 @@ from handdb.gapfill.refine import bone_bounds, refine_bone_lengths
 from handdb.gapfill.regression import regression_fill
 from handdb.gapfill.rest_pose import rest_pose_2d
 from handdb.gapfill.rigid import carry_along_chains, palm_joints
-from handdb.skeletons import load_skeleton
+from handdb.hand.skeletons import load_skeleton
 
 
 def _hide(n_frames, n_joints, gaps):

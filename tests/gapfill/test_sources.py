@@ -15,8 +15,8 @@ from handdb.gapfill.sources import (
     database_sources,
     store_evaluation,
 )
-from handdb.readers import discover, load_clip
-from handdb.store import Store
+from handdb.ingest import discover, load_clip
+from handdb.store.database import Store
 
 PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
 

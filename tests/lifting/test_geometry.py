@@ -1,6 +1,7 @@
 import numpy as np
 import pytest
 
+from handdb.hand.skeletons import load_skeleton
 from handdb.lifting.geometry import (
     accumulate_depths,
     depth_magnitudes,
@@ -9,7 +10,6 @@ from handdb.lifting.geometry import (
     path_matrix,
     projected_lengths,
 )
-from handdb.skeletons import load_skeleton
 
 
 @pytest.fixture

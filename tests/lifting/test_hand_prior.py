@@ -1,8 +1,8 @@
 import numpy as np
 import pytest
 
+from handdb.hand.layout import hand_layout
 from handdb.lifting.finger_geometry import FingerCandidates, anchor_joints
-from handdb.lifting.hand_layout import hand_layout
 from handdb.lifting.hand_prior import score_fingers, score_mirrored_fingers
 
 

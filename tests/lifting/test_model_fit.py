@@ -2,7 +2,7 @@ import numpy as np
 import pytest
 
 from handdb.clip import Camera
-from handdb.kinematics import build_hand_model, forward_kinematics
+from handdb.hand.model import build_hand_model, forward_kinematics
 from handdb.lifting import lift
 from handdb.lifting.model_fit import METHOD, fit_2d
 

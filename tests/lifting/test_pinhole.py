@@ -2,9 +2,9 @@ import numpy as np
 import pytest
 
 from handdb.clip import Camera
+from handdb.hand.skeletons import load_skeleton
 from handdb.lifting import bone_length_array
 from handdb.lifting.pinhole import camera_rays, deepest_feasible_root, estimate_root_depth
-from handdb.skeletons import load_skeleton
 from handdb.synthetic.clips import synthesize_clip
 
 

@@ -4,8 +4,8 @@ import numpy as np
 import pytest
 
 from handdb.clip import Camera
+from handdb.hand.skeletons import load_skeleton
 from handdb.lifting import lift
-from handdb.skeletons import load_skeleton
 from tests.lifting.conftest import ORTHOGRAPHIC
 
 PIXELS_PER_M = 1000.0

@@ -1,9 +1,9 @@
 import numpy as np
 import pytest
 
+from handdb.hand.skeletons import load_skeleton
 from handdb.lifting import lift
 from handdb.lifting.thesis import THESIS_POSITIVE_Z, inner_angle_deg, rule_chains, tip_turns
-from handdb.skeletons import load_skeleton
 from tests.lifting.conftest import ORTHOGRAPHIC
 
 

@@ -8,9 +8,9 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-from handdb.anthropometry import hand_length_proportions
 from handdb.clip import Clip, parse_sidecar
-from handdb.skeletons import Skeleton, load_skeleton
+from handdb.hand.anthropometry import hand_length_proportions
+from handdb.hand.skeletons import Skeleton, load_skeleton
 
 #: Hand length of the synthetic subject, mm.
 HAND_LENGTH_MM = 185.0

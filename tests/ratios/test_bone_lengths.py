@@ -2,18 +2,18 @@ import numpy as np
 import pyarrow.compute as pc
 import pytest
 
-from handdb.anthropometry import BUCHHOLZ_1992, hand_length_proportions
-from handdb.bone_lengths import (
+from handdb.errors import BoneLengthError
+from handdb.hand.anthropometry import BUCHHOLZ_1992, hand_length_proportions
+from handdb.hand.skeletons import load_skeleton
+from handdb.lengths.bone_lengths import (
     SOURCES,
     bone_lengths_table,
     clip_bone_lengths,
     lengths_from_ratios,
     most_stretched_frame,
 )
-from handdb.errors import BoneLengthError
-from handdb.ratios import bone_ratios, joint_ratios, table1_measurements
-from handdb.skeletons import load_skeleton
-from handdb.tables import empty, schema
+from handdb.lengths.ratios import bone_ratios, joint_ratios, table1_measurements
+from handdb.store.tables import empty, schema
 
 #: Curl per frame (radians); frame 3 shows the flat, stretched hand.
 CURL = np.array([0.9, 0.6, 0.3, 0.0, 0.4, 1.2])
@@ -92,19 +92,6 @@ def test_bone_without_any_source_raises(make_clip):
     assert "bone_lengths" in str(info.value)
 
 
-def test_markers_are_calibrated(make_clip, hand):
-    clip = make_clip(CURL, bone_lengths={"index_pip": 49.0})
-    rng = np.random.default_rng(3)
-    skeleton = clip.skeleton
-    markers = hand.posed(skeleton, hand.true_lengths(skeleton), rng.uniform(0, 1.2, 40))
-    markers = markers + rng.normal(0, 0.5, markers.shape)
-    result = clip_bone_lengths(clip, markers=markers)
-    calibrated = [j for j, s in enumerate(result.sources) if s == "calibrated"]
-    assert len(calibrated) == skeleton.n_joints - 2
-    assert np.isfinite(result.residuals[calibrated]).all()
-    # 0.5 mm noise over 40 frames; the X-ray prior pulls the phalanges a little.
-    error = np.abs(result.lengths - hand.true_lengths(skeleton))[calibrated]
-    assert error.max() < 1.0
 
 
 def test_lengths_from_ratios_average_the_known_phalanges(ratios):

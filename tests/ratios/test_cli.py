@@ -3,9 +3,9 @@ from pathlib import Path
 from typer.testing import CliRunner
 
 from handdb.cli.ratios import app
-from handdb.ratios import joint_ratios
-from handdb.store import Store
-from handdb.xray import read_xray
+from handdb.ingest.xray import read_xray
+from handdb.lengths.ratios import joint_ratios
+from handdb.store.database import Store
 
 runner = CliRunner()
 

@@ -7,14 +7,14 @@ import pyarrow.compute as pc
 import pytest
 from scipy import stats
 
-from handdb.ratios import (
+from handdb.ingest.xray import read_xray
+from handdb.lengths.ratios import (
     joint_ratios,
     paper_discrepancies,
     place_joints,
     relative_lengths,
     table1_measurements,
 )
-from handdb.xray import read_xray
 
 #: Figures printed by Chaudhry et al. for the index ("grooming") finger.
 PAPER_INDEX_J1_RATIOS_TEXT = (0.4865, 0.4728, 0.4862, 0.5047, 0.4728)

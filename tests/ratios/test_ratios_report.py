@@ -1,4 +1,4 @@
-from handdb.ratios import joint_ratios, ratios_markdown, table1_measurements
+from handdb.lengths.ratios import joint_ratios, ratios_markdown, table1_measurements
 
 
 def test_report_tabulates_the_cohort_and_states_both_discrepancies():

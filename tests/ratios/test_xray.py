@@ -3,7 +3,7 @@ from pathlib import Path
 import pytest
 
 from handdb.errors import InputError
-from handdb.xray import read_xray
+from handdb.ingest.xray import read_xray
 
 HEADER = "image_id,finger,segment,length,subject,sex,age,side\n"
 

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from handdb.clip import ClipSpec, parse_sidecar
-from handdb.skeletons import Skeleton, load_skeleton
+from handdb.hand.skeletons import Skeleton, load_skeleton
 
 SIDECAR = {"skeleton": "mediapipe21", "hand": "right", "fps": 30, "subject": "s01",
            "units": "mm", "camera": {"model": "orthographic"}}

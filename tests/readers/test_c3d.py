@@ -3,9 +3,9 @@ import numpy as np
 import pytest
 
 from handdb.errors import InputError
-from handdb.markers import dense_markers
-from handdb.readers import c3d as c3d_reader
-from handdb.readers.registry import match_format
+from handdb.ingest import c3d as c3d_reader
+from handdb.ingest.registry import match_format
+from handdb.markers.tables import dense_markers
 
 from .test_markers_csv import SKELETON, marker_spec, marker_track
 

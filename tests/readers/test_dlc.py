@@ -2,7 +2,7 @@ import numpy as np
 import pytest
 
 from handdb.errors import InputError
-from handdb.readers import dlc
+from handdb.ingest import dlc
 
 HEADER = ("scorer,DLC_resnet50,DLC_resnet50,DLC_resnet50,DLC_resnet50,DLC_resnet50,DLC_resnet50\n"
           "bodyparts,Wrist,Wrist,Wrist,IndexTip,IndexTip,IndexTip\n"

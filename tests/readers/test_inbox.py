@@ -5,7 +5,7 @@ import pyarrow as pa
 import pytest
 
 from handdb.errors import InputError
-from handdb.readers import (
+from handdb.ingest import (
     InputFormat,
     content_hash,
     discover,
@@ -18,7 +18,7 @@ from handdb.readers import (
     truth_3d_table,
     truth_csv,
 )
-from handdb.tables import schema
+from handdb.store.tables import schema
 
 
 def read_test_xray(path):

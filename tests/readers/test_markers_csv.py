@@ -3,11 +3,11 @@ import pytest
 
 from handdb.clip import Camera, ClipSpec
 from handdb.errors import InputError
-from handdb.markers import dense_markers, markers_3d_table
-from handdb.readers import markers_csv
-from handdb.readers.registry import match_format
-from handdb.skeletons import load_skeleton
-from handdb.tables import schema
+from handdb.hand.skeletons import load_skeleton
+from handdb.ingest import markers_csv
+from handdb.ingest.registry import match_format
+from handdb.markers.tables import dense_markers, markers_3d_table
+from handdb.store.tables import schema
 
 SKELETON = load_skeleton("mediapipe21")
 

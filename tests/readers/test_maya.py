@@ -2,7 +2,7 @@ import numpy as np
 import pytest
 
 from handdb.errors import InputError
-from handdb.readers import maya
+from handdb.ingest import maya
 
 
 @pytest.fixture

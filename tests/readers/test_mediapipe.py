@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from handdb.errors import InputError
-from handdb.readers import mediapipe
+from handdb.ingest import mediapipe
 
 IMAGE = {"width": 640, "height": 480}
 

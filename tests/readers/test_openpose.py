@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from handdb.errors import InputError
-from handdb.readers import openpose
+from handdb.ingest import openpose
 
 
 def keypoint_file(folder, frame, people, name="clip"):

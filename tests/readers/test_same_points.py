@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from handdb.readers import discover, dlc, load_clip, openpose, tracks_csv
+from handdb.ingest import discover, dlc, load_clip, openpose, tracks_csv
 
 TOOL_NAMES = {"wrist": "Wrist", "index_tip": "IndexFingerTip"}
 

@@ -2,7 +2,7 @@ import numpy as np
 import pytest
 
 from handdb.errors import InputError
-from handdb.readers import tracks_csv
+from handdb.ingest import tracks_csv
 
 
 def read_text(tmp_path, spec_for, skeleton, text, **sidecar):

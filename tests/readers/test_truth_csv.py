@@ -2,7 +2,7 @@ import numpy as np
 import pytest
 
 from handdb.errors import InputError
-from handdb.readers import truth_csv
+from handdb.ingest import truth_csv
 
 
 def test_round_trip_skips_points_without_truth(tmp_path, spec_for, mediapipe21):

@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from handdb.skeletons import FINGERS, load_skeleton
+from handdb.hand.skeletons import FINGERS, load_skeleton
 from handdb.synthetic.hand_model import make_hand, thesis_hand, xray_ratios
 
 PRESETS = ("mediapipe21", "dhg22", "thesis21")

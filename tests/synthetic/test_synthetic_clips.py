@@ -5,9 +5,9 @@ import json
 import numpy as np
 import pytest
 
-from handdb import tables
 from handdb.clip import parse_sidecar
-from handdb.skeletons import load_skeleton
+from handdb.hand.skeletons import load_skeleton
+from handdb.store import tables
 from handdb.synthetic import MOTIONS, synthesize_clip, thesis_clench_clip
 
 

@@ -1,0 +1,213 @@
+"""A skinned hand mesh: a capsule per finger bone and a rounded palm, posed by skinning.
+
+The mesh is built in the rest pose of :func:`handdb.export.rotations.rest_positions` (a flat hand,
+fingers along ``+Y``), sized from the bone lengths. Every finger bone whose parent joint
+aims at it gets a capsule bound to that parent joint, blending into the grandparent joint
+over one radius around the knuckle so joints bend smoothly. The palm is the convex hull of
+spheres around the palm root and its children (wrist, MCPs, thumb base), bound rigidly to
+the root. Each vertex has :data:`INFLUENCES` joint influences whose weights sum to 1.
+
+Posing uses linear blend skinning with the joint transforms of
+:mod:`handdb.export.rotations`, so a posed mesh follows the same skeleton that is exported to USD.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import trimesh
+
+from handdb.export.rotations import (
+    child_counts,
+    joint_rotations,
+    rest_pose,
+    rest_positions,
+    world_transforms,
+)
+from handdb.hand.skeletons import Skeleton
+
+#: Joint influences per vertex.
+INFLUENCES = 2
+
+#: Capsule radius of a finger as a fraction of the mean length of its capsule bones.
+FINGER_RADIUS_RATIO = 0.28
+
+#: Radius of the palm's rounded edge as a multiple of the mean finger radius.
+PALM_RADIUS_RATIO = 1.2
+
+#: Rings along and segments around each capsule (trimesh's ``count``).
+CAPSULE_COUNT = (10, 8)
+
+#: Subdivisions of the spheres whose hull makes the palm.
+PALM_SPHERE_SUBDIVISIONS = 1
+
+
+@dataclass(frozen=True)
+class HandMesh:
+    """A hand mesh in the rest pose with its skinning.
+
+    Attributes
+    ----------
+    vertices
+        ``(V, 3) float64`` rest-pose positions, clip units, in the skeleton's bind space.
+    faces
+        ``(F, 3) int64`` vertex indices, counter-clockwise seen from outside.
+    joint_indices
+        ``(V, INFLUENCES) int64`` joints that move each vertex.
+    joint_weights
+        ``(V, INFLUENCES) float64`` their weights; each row sums to 1.
+    face_joints
+        ``(F,) int64`` the bone each face belongs to, named by its child joint as bones
+        are; the palm's faces carry the root joint.
+    """
+
+    vertices: np.ndarray
+    faces: np.ndarray
+    joint_indices: np.ndarray
+    joint_weights: np.ndarray
+    face_joints: np.ndarray
+
+    def to_trimesh(self, vertices: np.ndarray | None = None) -> trimesh.Trimesh:
+        """Return the mesh (or its faces on ``vertices``) with ``face_attributes['joint']``."""
+        return trimesh.Trimesh(
+            vertices=self.vertices if vertices is None else vertices,
+            faces=self.faces,
+            face_attributes={"joint": self.face_joints},
+            process=False,
+        )
+
+
+def _capsule_bones(skeleton: Skeleton) -> np.ndarray:
+    """Bones ``(B', 2)`` (parent, child) whose parent joint has exactly one child."""
+    return skeleton.bones[child_counts(skeleton)[skeleton.bones[:, 0]] == 1]
+
+
+def _finger_radii(skeleton: Skeleton, bone_lengths: np.ndarray, bones: np.ndarray) -> dict:
+    fingers = np.array([skeleton.fingers[c] for c in bones[:, 1]])
+    return {
+        f: FINGER_RADIUS_RATIO * bone_lengths[bones[fingers == f, 1]].mean()
+        for f in np.unique(fingers)
+    }
+
+
+def _capsule(start: np.ndarray, end: np.ndarray, radius: float) -> trimesh.Trimesh:
+    """Return a capsule whose sphere centres are ``start`` and ``end``."""
+    axis = end - start
+    length = float(np.linalg.norm(axis))
+    transform = trimesh.geometry.align_vectors([0.0, 0.0, 1.0], axis / length)
+    transform[:3, 3] = (start + end) / 2
+    return trimesh.creation.capsule(height=length, radius=radius, count=CAPSULE_COUNT,
+                                    transform=transform)
+
+
+def hand_mesh(skeleton: Skeleton, bone_lengths: np.ndarray) -> HandMesh:
+    """Build the skinned capsule hand of ``skeleton`` in its rest pose.
+
+    Parameters
+    ----------
+    skeleton
+        The skeleton; it needs a palm (see :func:`handdb.export.rotations.palm_frame`).
+    bone_lengths
+        ``(J,) float64`` length of the bone ending at each joint, clip units.
+
+    Returns
+    -------
+    HandMesh
+        A few thousand faces, in clip units.
+    """
+    rest = rest_positions(skeleton, bone_lengths)
+    bones = _capsule_bones(skeleton)
+    radii = _finger_radii(skeleton, bone_lengths, bones)
+
+    parts, indices, weights, face_joints = [], [], [], []
+    for parent, child in bones:
+        radius = radii[skeleton.fingers[child]]
+        capsule = _capsule(rest[parent], rest[child], radius)
+        direction = (rest[child] - rest[parent]) / bone_lengths[child]
+        along = (capsule.vertices - rest[parent]) @ direction
+        own = np.clip(0.5 + along / (2 * radius), 0.0, 1.0)
+        parts.append(capsule)
+        indices.append(np.tile([parent, skeleton.parents[parent]], (len(capsule.vertices), 1)))
+        weights.append(np.stack([own, 1.0 - own], axis=1))
+        face_joints.append(np.full(len(capsule.faces), child))
+
+    palm_joints = np.append(skeleton.root, skeleton.children(skeleton.root))
+    palm_radius = PALM_RADIUS_RATIO * np.mean(list(radii.values()))
+    sphere = trimesh.creation.icosphere(subdivisions=PALM_SPHERE_SUBDIVISIONS, radius=palm_radius)
+    cloud = (rest[palm_joints, None, :] + sphere.vertices[None]).reshape(-1, 3)
+    palm = trimesh.convex.convex_hull(cloud)
+    parts.append(palm)
+    indices.append(np.tile([skeleton.root, skeleton.root], (len(palm.vertices), 1)))
+    weights.append(np.tile([1.0, 0.0], (len(palm.vertices), 1)))
+    face_joints.append(np.full(len(palm.faces), skeleton.root))
+
+    offsets = np.cumsum([0] + [len(p.vertices) for p in parts[:-1]])
+    return HandMesh(
+        vertices=np.concatenate([p.vertices for p in parts]),
+        faces=np.concatenate(
+            [p.faces + o for p, o in zip(parts, offsets, strict=True)]).astype(np.int64),
+        joint_indices=np.concatenate(indices).astype(np.int64),
+        joint_weights=np.concatenate(weights),
+        face_joints=np.concatenate(face_joints).astype(np.int64),
+    )
+
+
+def posed_vertices(
+    mesh: HandMesh, xyz: np.ndarray, skeleton: Skeleton, bone_lengths: np.ndarray
+) -> np.ndarray:
+    """Skin ``mesh`` onto joint positions by linear blend skinning.
+
+    Parameters
+    ----------
+    mesh
+        The rest-pose mesh of ``skeleton`` and ``bone_lengths`` (:func:`hand_mesh`).
+    xyz
+        Joint positions, ``(T, J, 3) float64``, clip units, no NaN.
+    skeleton, bone_lengths
+        As for :func:`hand_mesh`.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(T, V, 3) float64`` posed vertices, clip units. The skeleton is posed by
+        :func:`handdb.export.rotations.joint_rotations`, so where ``xyz`` disagrees with
+        ``bone_lengths`` the mesh follows the bone directions.
+    """
+    bind_rot, bind_pos = world_transforms(rest_pose(skeleton, bone_lengths), skeleton)
+    rot, pos = world_transforms(joint_rotations(xyz, skeleton, bone_lengths), skeleton)
+    linear = rot @ np.swapaxes(bind_rot, -1, -2)                          # (T, J, 3, 3)
+    shift = pos - np.einsum("tjab,jb->tja", linear, bind_pos[0])          # (T, J, 3)
+    per_influence = (
+        np.einsum("tvkab,vb->tvka", linear[:, mesh.joint_indices], mesh.vertices)
+        + shift[:, mesh.joint_indices]
+    )
+    return np.einsum("tvka,vk->tva", per_influence, mesh.joint_weights)
+
+
+def posed_hand_mesh(
+    xyz_frame: np.ndarray,
+    skeleton: Skeleton,
+    bone_lengths: np.ndarray,
+    mesh: HandMesh | None = None,
+) -> trimesh.Trimesh:
+    """Pose the hand mesh at one frame, e.g. for occlusion ray casts (``trimesh.ray``).
+
+    Parameters
+    ----------
+    xyz_frame
+        Joint positions of one frame, ``(J, 3) float64``, clip units.
+    skeleton, bone_lengths
+        As for :func:`hand_mesh`.
+    mesh
+        The rest-pose mesh, to reuse across frames; built when ``None``.
+
+    Returns
+    -------
+    trimesh.Trimesh
+        Posed mesh in the frame of ``xyz_frame``; ``face_attributes['joint']`` holds the
+        bone of each face (its child joint index; the root for the palm).
+    """
+    mesh = hand_mesh(skeleton, bone_lengths) if mesh is None else mesh
+    vertices = posed_vertices(mesh, np.asarray(xyz_frame)[None], skeleton, bone_lengths)[0]
+    return mesh.to_trimesh(vertices)

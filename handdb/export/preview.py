@@ -1,0 +1,166 @@
+"""A clip's preview: a PNG contact sheet of a few frames of its skeleton (matplotlib).
+
+Each column is one frame, evenly spaced over the clip; the top row is the camera's view
+(``x`` right, ``y`` down) and the bottom row a side view (depth ``z`` to the right, ``y``
+down). Bones are coloured by finger; missing joints leave gaps. Every panel shares one
+scale, so motion between frames reads at a glance and only the first panel of a row
+carries ticks.
+
+The build draws one sheet per clip, so drawing is kept cheap: each row is a single Axes
+whose panels sit side by side in data coordinates (an Axes costs more to make and draw
+than everything in it), a row's bones are one
+:class:`~matplotlib.collections.LineCollection`, and the layout is fixed in inches. The
+figure is drawn with the Agg canvas directly (no pyplot state), so previews can be made
+from worker threads.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+from matplotlib.axes import Axes
+from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.collections import LineCollection, PatchCollection
+from matplotlib.figure import Figure
+from matplotlib.lines import Line2D
+from matplotlib.patches import Rectangle
+from matplotlib.ticker import MaxNLocator
+
+from handdb.hand.skeletons import FINGERS, Skeleton
+
+#: Frames shown by default.
+DEFAULT_PREVIEW_FRAMES = 6
+
+#: Colour of each finger's bones (and of the palm's).
+FINGER_COLOURS: dict[str, str] = {
+    "thumb": "tab:red", "index": "tab:orange", "middle": "tab:green",
+    "ring": "tab:blue", "little": "tab:purple", "palm": "0.35",
+}
+
+_DPI = 100
+#: Fixed layout, inches: side of a square panel, gaps between panels, figure margins.
+_PANEL = 2.0
+_COLUMN_GAP = 0.15
+_ROW_GAP = 0.5
+_LEFT, _RIGHT, _TOP, _BOTTOM = 0.75, 0.1, 0.55, 0.45
+#: Half the side of a panel, as a fraction of the largest extent of the clip's joints.
+_HALF_SPAN = 0.55
+_TICKS_PER_AXIS = 4
+_VIEWS = (("x", 0, "camera view"), ("z", 2, "side view"))
+
+
+def preview_frames(n_frames: int, count: int = DEFAULT_PREVIEW_FRAMES) -> np.ndarray:
+    """Return ``count`` frame indices evenly spaced from first to last, ``(k,) int``."""
+    return np.unique(np.linspace(0, n_frames - 1, min(count, n_frames)).round().astype(int))
+
+
+def _view_box(xyz: np.ndarray) -> tuple[np.ndarray, float]:
+    """Centre ``(3,)`` and half side of the cube every panel shows, clip units (NaN skipped)."""
+    coordinates = np.ascontiguousarray(xyz.reshape(-1, 3).T)  # (3, T * J), fast to reduce
+    low, high = np.fmin.reduce(coordinates, axis=1), np.fmax.reduce(coordinates, axis=1)
+    if not np.isfinite(low).all():
+        return np.zeros(3), _HALF_SPAN
+    return (low + high) / 2, _HALF_SPAN * max(float((high - low).max()), 1e-9)
+
+
+def _sheet(n_columns: int) -> tuple[Figure, list[Axes]]:
+    """A figure with one Axes per view, each as wide as ``n_columns`` square panels."""
+    n_rows = len(_VIEWS)
+    row_width = n_columns * _PANEL + (n_columns - 1) * _COLUMN_GAP
+    width = _LEFT + row_width + _RIGHT
+    height = _TOP + n_rows * _PANEL + (n_rows - 1) * _ROW_GAP + _BOTTOM
+    figure = Figure(figsize=(width, height), dpi=_DPI)
+    FigureCanvasAgg(figure)
+    rows = [figure.add_axes((_LEFT / width,
+                             (_BOTTOM + (n_rows - 1 - row) * (_PANEL + _ROW_GAP)) / height,
+                             row_width / width, _PANEL / height))
+            for row in range(n_rows)]
+    return figure, rows
+
+
+def _scale_ticks(low: float, high: float) -> np.ndarray:
+    """Round tick values inside ``[low, high]``, ``(n,) float64``."""
+    values = np.asarray(MaxNLocator(_TICKS_PER_AXIS).tick_values(low, high))
+    return values[(values >= low) & (values <= high)]
+
+
+def write_preview_png(
+    path: str | Path,
+    *,
+    skeleton: Skeleton,
+    xyz: np.ndarray,
+    units: str,
+    title: str = "",
+    fps: float | None = None,
+    count: int = DEFAULT_PREVIEW_FRAMES,
+) -> Path:
+    """Draw a contact sheet of ``count`` frames of ``xyz`` and save it as PNG.
+
+    Parameters
+    ----------
+    path
+        Output ``.png`` file; its folder must exist.
+    skeleton
+        Skeleton of ``xyz``.
+    xyz
+        Joint positions, ``(T, J, 3) float64``, clip units, handdb's camera frame; NaN
+        where a joint has no position.
+    units
+        Length unit of ``xyz``, for the axis labels.
+    title
+        Figure title, e.g. the clip id.
+    fps
+        Frames per second; when given, panels show the time of their frame.
+    count
+        Frames to show.
+
+    Returns
+    -------
+    pathlib.Path
+        ``path``.
+    """
+    path = Path(path)
+    xyz = np.asarray(xyz, dtype=np.float64)
+    frames = preview_frames(len(xyz), count)
+    centre, half = _view_box(xyz)
+    side = 2 * half
+    pitch = side * (1 + _COLUMN_GAP / _PANEL)             # panel to panel, clip units
+    panel_left = np.arange(len(frames)) * pitch           # (k,) left edge of each panel
+    poses = xyz[frames]                                   # (k, J, 3)
+    drawn = np.isfinite(poses[:, skeleton.bones]).all(axis=(-2, -1))  # (k, B)
+    bone_colours = np.array([FINGER_COLOURS[skeleton.fingers[c]] for c in skeleton.bones[:, 1]])
+    colours = np.broadcast_to(bone_colours, drawn.shape)[drawn]
+
+    figure, rows = _sheet(len(frames))
+    for ax, (label, axis, view) in zip(rows, _VIEWS, strict=True):
+        across = poses[..., axis] - (centre[axis] - half) + panel_left[:, None]  # (k, J)
+        down = poses[..., 1]
+        segments = np.stack([across[:, skeleton.bones], down[:, skeleton.bones]], axis=-1)
+        ax.add_collection(LineCollection(segments[drawn], colors=colours, linewidths=2))
+        ax.plot(across.ravel(), down.ravel(), ".", color="black", ms=4)
+        ax.add_collection(PatchCollection(
+            [Rectangle((left, centre[1] - half), side, side) for left in panel_left],
+            facecolor="none", edgecolor="black", linewidth=0.8, clip_on=False))
+        ax.set_xlim(0, panel_left[-1] + side)
+        ax.set_ylim(centre[1] + half, centre[1] - half)
+        ax.set_aspect("equal")
+        ax.set_frame_on(False)
+        scale = _scale_ticks(centre[axis] - half, centre[axis] + half)
+        ax.set_xticks(scale - (centre[axis] - half), [f"{v:g}" for v in scale])
+        ax.set_yticks(_scale_ticks(centre[1] - half, centre[1] + half))
+        ax.tick_params(labelsize=6, length=2, pad=1)
+        ax.set_xlabel(f"{label} ({units})", fontsize=7, labelpad=1, ha="center",
+                      x=half / (panel_left[-1] + side))
+        ax.set_ylabel(f"{view}\ny ({units}, down)", fontsize=7, labelpad=1)
+    for left, frame in zip(panel_left, frames, strict=True):
+        when = f" · {frame / fps:.2f} s" if fps else ""
+        rows[0].text(left + half, 1.02, f"frame {frame}{when}", fontsize=8, ha="center",
+                     va="bottom", transform=rows[0].get_xaxis_transform())
+    handles = [Line2D([], [], color=FINGER_COLOURS[f], lw=2, label=f) for f in FINGERS]
+    figure.legend(handles=handles, loc="lower center", ncols=len(FINGERS), fontsize=7,
+                  frameon=False, borderaxespad=0.2)
+    if title:
+        figure.suptitle(title, fontsize=10)
+    figure.savefig(path, format="png")
+    return path

@@ -1,0 +1,278 @@
+"""Export a clip as a UsdSkel animation with a skinned hand mesh (usd-core, module ``pxr``).
+
+Layout of the exported stage (``<Hand>`` is ``RightHand`` or ``LeftHand``)::
+
+    /<Hand>            SkelRoot (default prim; customData handdb:clipId, handdb:hand)
+    /<Hand>/Skeleton   Skeleton: joints, bindTransforms, restTransforms;
+                       SkelBindingAPI with skel:animationSource -> Animation
+    /<Hand>/Animation  SkelAnimation: translations, rotations, scales at every frame
+    /<Hand>/Mesh       Mesh of capsules and palm, SkelBindingAPI bound to the Skeleton
+
+Axes. handdb's 3D frame is the camera's: ``x`` right, ``y`` down, ``z`` away from the
+camera. The stage is Y-up and right-handed, and is handdb's frame turned 180 degrees
+about ``x`` (:data:`handdb.export.rotations.CAMERA_TO_Y_UP`): ``(x, y, z) -> (x, -y, -z)``, so
+USD's ``+Y`` is up in the image and ``+Z`` points towards the camera: a USD camera on ``+Z``
+looking down ``-Z`` sees what the source camera saw. The turn is applied to the root
+joint only; every other joint's local transform is unchanged.
+
+Lengths stay in the clip's units and ``metersPerUnit`` says which. Frame ``i`` is at time
+code ``i``; ``timeCodesPerSecond`` and ``framesPerSecond`` are the clip's fps.
+
+Joint transforms come from :func:`handdb.export.rotations.joint_rotations` unless the caller
+passes its own (e.g. fitted) :class:`~handdb.export.rotations.JointMotion`. By default the
+animation reproduces the positions exactly: where they disagree with the bone lengths
+(noisy lifting), a bone takes its measured length in that frame through the joint's
+translation channel. ``keep_lengths=True`` imposes the bone lengths instead (rigid bones,
+measured directions). The bind and rest pose is the flat hand of
+:func:`handdb.export.rotations.rest_pose` with the given bone lengths; the mesh is built in it.
+"""
+
+from __future__ import annotations
+
+import os
+import tempfile
+from pathlib import Path
+
+import numpy as np
+from pxr import Gf, Sdf, Usd, UsdGeom, UsdSkel, UsdUtils, Vt
+from scipy.spatial.transform import Rotation
+
+from handdb.clip import HANDS, METERS_PER_UNIT
+from handdb.errors import StageError
+from handdb.export.mesh import INFLUENCES, hand_mesh
+from handdb.export.rotations import (
+    CAMERA_TO_Y_UP,
+    JointMotion,
+    joint_rotations,
+    rest_pose,
+    turn_root,
+    world_transforms,
+)
+from handdb.hand.skeletons import Skeleton
+
+#: File suffixes written as a plain layer (``.usd`` is written as binary crate).
+LAYER_SUFFIXES = (".usd", ".usdc", ".usda")
+USDZ_SUFFIX = ".usdz"
+
+
+def joint_paths(skeleton: Skeleton) -> list[str]:
+    """UsdSkel joint paths (``wrist/index_mcp/index_pip``), parents before children."""
+    paths: list[str] = []
+    for joint, parent in zip(skeleton.joints, skeleton.parents, strict=True):
+        paths.append(joint if parent < 0 else f"{paths[parent]}/{joint}")
+    return paths
+
+
+def _usd_matrices(orientations: np.ndarray, positions: np.ndarray) -> Vt.Matrix4dArray:
+    """USD (row-vector) 4x4 matrices from rotation matrices ``(N, 3, 3)`` and positions."""
+    matrices = np.zeros((len(orientations), 4, 4))
+    matrices[:, :3, :3] = np.swapaxes(orientations, -1, -2)
+    matrices[:, 3, :3] = positions
+    matrices[:, 3, 3] = 1.0
+    return Vt.Matrix4dArray.FromNumpy(matrices)
+
+
+def _set_stage_metadata(stage: Usd.Stage, n_frames: int, fps: float, units: str) -> None:
+    UsdGeom.SetStageUpAxis(stage, UsdGeom.Tokens.y)
+    UsdGeom.SetStageMetersPerUnit(stage, METERS_PER_UNIT[units])
+    stage.SetTimeCodesPerSecond(fps)
+    stage.SetFramesPerSecond(fps)
+    stage.SetStartTimeCode(0)
+    stage.SetEndTimeCode(n_frames - 1)
+
+
+def _author_animation(anim: UsdSkel.Animation, motion: JointMotion) -> None:
+    """Set every channel of ``anim`` at every frame (a missing one falls back to rest)."""
+    n_frames, n_joints = motion.rotations.shape[:2]
+    xyzw = np.ascontiguousarray(np.roll(motion.rotations, -1, axis=-1), dtype=np.float32)
+    translations = np.ascontiguousarray(motion.translations, dtype=np.float32)
+    scales = Vt.Vec3hArray.FromNumpy(np.ones((n_joints, 3), dtype=np.float16))
+    channels = [
+        (anim.CreateRotationsAttr().GetPath(), Vt.QuatfArray.FromNumpy, xyzw),
+        (anim.CreateTranslationsAttr().GetPath(), Vt.Vec3fArray.FromNumpy, translations),
+    ]
+    scales_path = anim.CreateScalesAttr().GetPath()
+    layer = anim.GetPrim().GetStage().GetEditTarget().GetLayer()
+    with Sdf.ChangeBlock():
+        for frame in range(n_frames):
+            for path, to_vt, values in channels:
+                layer.SetTimeSample(path, frame, to_vt(values[frame]))
+            layer.SetTimeSample(scales_path, frame, scales)
+
+
+def _author_mesh(
+    stage: Usd.Stage, path: Sdf.Path, skeleton: Skeleton, bone_lengths: np.ndarray,
+    skel: UsdSkel.Skeleton,
+) -> None:
+    hand = hand_mesh(skeleton, bone_lengths)
+    mesh = UsdGeom.Mesh.Define(stage, path)
+    points = np.ascontiguousarray(hand.vertices, dtype=np.float32)
+    mesh.CreatePointsAttr(Vt.Vec3fArray.FromNumpy(points))
+    mesh.CreateFaceVertexCountsAttr(Vt.IntArray.FromNumpy(np.full(len(hand.faces), 3, np.int32)))
+    mesh.CreateFaceVertexIndicesAttr(Vt.IntArray.FromNumpy(hand.faces.astype(np.int32).ravel()))
+    mesh.CreateExtentAttr(Vt.Vec3fArray.FromNumpy(np.stack([points.min(0), points.max(0)])))
+    mesh.CreateSubdivisionSchemeAttr(UsdGeom.Tokens.none)
+    binding = UsdSkel.BindingAPI.Apply(mesh.GetPrim())
+    binding.CreateSkeletonRel().SetTargets([skel.GetPath()])
+    binding.CreateJointIndicesPrimvar(False, INFLUENCES).Set(
+        Vt.IntArray.FromNumpy(hand.joint_indices.astype(np.int32).ravel()))
+    binding.CreateJointWeightsPrimvar(False, INFLUENCES).Set(
+        Vt.FloatArray.FromNumpy(hand.joint_weights.astype(np.float32).ravel()))
+    binding.CreateGeomBindTransformAttr(Gf.Matrix4d(1.0))
+
+
+def build_clip_stage(
+    *,
+    clip_id: str,
+    skeleton: Skeleton,
+    motion: JointMotion,
+    bone_lengths: np.ndarray,
+    fps: float,
+    units: str,
+    hand: str,
+) -> Usd.Stage:
+    """Build the in-memory stage of a clip (see the module doc for its layout).
+
+    Parameters
+    ----------
+    clip_id
+        The clip's id, recorded as the SkelRoot's ``handdb:clipId`` custom data.
+    skeleton
+        Skeleton of the motion.
+    motion
+        Local joint transforms in handdb's camera frame, ``T`` frames, clip units.
+    bone_lengths
+        ``(J,) float64`` length of the bone ending at each joint, clip units.
+    fps
+        Frames per second.
+    units
+        Clip length unit: ``mm``, ``cm``, ``m`` or ``in``.
+    hand
+        ``left`` or ``right``.
+
+    Returns
+    -------
+    pxr.Usd.Stage
+    """
+    stage = Usd.Stage.CreateInMemory()
+    _set_stage_metadata(stage, motion.n_frames, fps, units)
+    root = UsdSkel.Root.Define(stage, Sdf.Path(f"/{hand.capitalize()}Hand"))
+    stage.SetDefaultPrim(root.GetPrim())
+    root.GetPrim().SetCustomDataByKey("handdb:clipId", clip_id)
+    root.GetPrim().SetCustomDataByKey("handdb:hand", hand)
+
+    joints = Vt.TokenArray(joint_paths(skeleton))
+    rest = rest_pose(skeleton, bone_lengths)
+    rest_local = Rotation.from_quat(rest.rotations[0], scalar_first=True).as_matrix()
+    bind_orientations, bind_positions = world_transforms(rest, skeleton)
+    skel = UsdSkel.Skeleton.Define(stage, root.GetPath().AppendChild("Skeleton"))
+    skel.CreateJointsAttr(joints)
+    skel.CreateJointNamesAttr(Vt.TokenArray(list(skeleton.joints)))
+    skel.CreateBindTransformsAttr(_usd_matrices(bind_orientations[0], bind_positions[0]))
+    skel.CreateRestTransformsAttr(_usd_matrices(rest_local, rest.translations[0]))
+
+    anim = UsdSkel.Animation.Define(stage, root.GetPath().AppendChild("Animation"))
+    anim.CreateJointsAttr(joints)
+    _author_animation(anim, turn_root(motion, skeleton, CAMERA_TO_Y_UP))
+    UsdSkel.BindingAPI.Apply(skel.GetPrim()).CreateAnimationSourceRel().SetTargets(
+        [anim.GetPath()])
+
+    _author_mesh(stage, root.GetPath().AppendChild("Mesh"), skeleton, bone_lengths, skel)
+    return stage
+
+
+def _write_atomically(stage: Usd.Stage, path: Path) -> None:
+    """Write ``stage`` to ``path`` (format from its suffix) via a file renamed into place."""
+    with tempfile.TemporaryDirectory(dir=path.parent, prefix=".usd-export-") as tmp:
+        if path.suffix == USDZ_SUFFIX:
+            layer_file = Path(tmp) / f"{path.stem}.usdc"
+            stage.GetRootLayer().Export(str(layer_file))
+            written = Path(tmp) / path.name
+            if not UsdUtils.CreateNewUsdzPackage(Sdf.AssetPath(str(layer_file)), str(written)):
+                raise StageError(f"usd-core could not package {path}")
+        else:
+            written = Path(tmp) / path.name
+            if not stage.GetRootLayer().Export(str(written)):
+                raise StageError(f"usd-core could not write {path}")
+        os.replace(written, path)
+
+
+def export_clip_usd(
+    path: str | Path,
+    *,
+    clip_id: str,
+    skeleton: Skeleton,
+    xyz: np.ndarray,
+    bone_lengths: np.ndarray,
+    fps: float,
+    units: str,
+    hand: str,
+    rotations: JointMotion | None = None,
+    keep_lengths: bool = False,
+) -> Path:
+    """Write a clip as a UsdSkel animation with a skinned hand mesh.
+
+    Parameters
+    ----------
+    path
+        Output file: ``.usd`` or ``.usdc`` (binary crate), ``.usda`` (text) or ``.usdz``
+        (package). Its folder must exist; an existing file is replaced atomically.
+    clip_id
+        The clip's id.
+    skeleton
+        Skeleton of ``xyz``.
+    xyz
+        Joint positions, ``(T, J, 3) float64``, clip units, handdb's camera frame, no NaN.
+    bone_lengths
+        ``(J,) float64`` length of the bone ending at each joint, clip units.
+    fps
+        Frames per second, > 0.
+    units
+        ``mm``, ``cm``, ``m`` or ``in``.
+    hand
+        ``left`` or ``right``.
+    rotations
+        Local joint transforms to export instead of those computed from ``xyz``.
+    keep_lengths
+        When computing the transforms: ``False`` reproduces ``xyz`` exactly, ``True``
+        gives every bone its length from ``bone_lengths`` (see the module doc).
+
+    Returns
+    -------
+    pathlib.Path
+        ``path``.
+
+    Raises
+    ------
+    ValueError
+        On an unknown suffix, unit or hand, a non-positive fps, or arrays whose shapes do
+        not match ``skeleton``.
+    StageError
+        If the positions have NaN (fill gaps first) or usd-core cannot write the file.
+    """
+    path = Path(path)
+    if path.suffix not in (*LAYER_SUFFIXES, USDZ_SUFFIX):
+        raise ValueError(f"{path}: the suffix must be one of {(*LAYER_SUFFIXES, USDZ_SUFFIX)}")
+    if units not in METERS_PER_UNIT:
+        raise ValueError(f"units '{units}' is not one of {tuple(METERS_PER_UNIT)}")
+    if hand not in HANDS:
+        raise ValueError(f"hand '{hand}' is not one of {HANDS}")
+    if not fps > 0:
+        raise ValueError(f"fps must be positive, got {fps}")
+    xyz = np.asarray(xyz, dtype=np.float64)
+    if xyz.ndim != 3 or xyz.shape[1:] != (skeleton.n_joints, 3) or len(xyz) == 0:
+        raise ValueError(f"xyz must be (T, {skeleton.n_joints}, 3) with T > 0, got {xyz.shape}")
+    if np.shape(bone_lengths) != (skeleton.n_joints,):
+        raise ValueError(
+            f"bone_lengths must be ({skeleton.n_joints},), got {np.shape(bone_lengths)}")
+    if rotations is None:
+        missing = ~np.isfinite(xyz).all(axis=(1, 2))
+        if missing.any():
+            raise StageError(f"clip '{clip_id}': {missing.sum()} of {len(xyz)} frames have "
+                             "joints without a 3D position; fill the gaps before exporting")
+        rotations = joint_rotations(xyz, skeleton, bone_lengths, keep_lengths=keep_lengths)
+    stage = build_clip_stage(clip_id=clip_id, skeleton=skeleton, motion=rotations,
+                             bone_lengths=np.asarray(bone_lengths, dtype=np.float64),
+                             fps=fps, units=units, hand=hand)
+    _write_atomically(stage, path)
+    return path

@@ -1,0 +1,211 @@
+"""Hand skeleton topologies, read from ``schemas/skeletons/*.json``.
+
+A skeleton is a tree of named joints. Each joint has a parent (``None`` for the root), a
+finger (``thumb``, ``index``, ``middle``, ``ring``, ``little`` or ``palm``) and a role
+(``wrist``, ``cmc``, ``mcp``, ``pip``, ``dip``, ``ip``, ``tip``, ``palm_fold``,
+``palm_center``). A *bone* is named by its child joint: the bone ``index_pip`` runs from
+``index_mcp`` to ``index_pip``. Joint names are the canonical names of handdb
+(the ``mediapipe21`` names), so joints of different presets correspond by name.
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass, field
+from functools import cache
+from pathlib import Path
+
+import numpy as np
+
+from handdb.errors import SkeletonError
+from handdb.paths import SCHEMAS_DIR
+
+SKELETONS_DIR = SCHEMAS_DIR / "skeletons"
+
+#: Fingers from the thumb side to the little-finger side.
+FINGERS: tuple[str, ...] = ("thumb", "index", "middle", "ring", "little")
+
+#: The joints of a finger a hinge can bend, in order from base to tip, by role.
+HINGE_ROLES = frozenset({"pip", "dip", "ip"})
+
+
+@dataclass(frozen=True)
+class Skeleton:
+    """A hand skeleton: joints in topological order (every parent before its children).
+
+    Attributes
+    ----------
+    name
+        Preset name, e.g. ``"mediapipe21"``.
+    joints
+        Canonical joint names, ``(J,)``.
+    parents
+        Index of each joint's parent, ``(J,) int64``; ``-1`` for the root.
+    fingers
+        Finger of each joint, ``(J,)``.
+    roles
+        Anatomical role of each joint, ``(J,)``.
+    ids
+        The source's own numeric id of each joint (``thesis21``: the thesis's feature
+        point numbers), ``(J,)``.
+    source_names
+        The source's own name of each joint, ``(J,)``.
+    reference_lengths
+        Bone lengths shipped with the preset (child joint -> length), may be empty.
+    reference_units
+        Units of ``reference_lengths``.
+    """
+
+    name: str
+    joints: tuple[str, ...]
+    parents: np.ndarray
+    fingers: tuple[str, ...]
+    roles: tuple[str, ...]
+    ids: tuple[int, ...]
+    source_names: tuple[str, ...]
+    description: str = ""
+    reference_lengths: dict[str, float] = field(default_factory=dict)
+    reference_units: str | None = None
+
+    @property
+    def n_joints(self) -> int:
+        """Number of joints ``J``."""
+        return len(self.joints)
+
+    @property
+    def root(self) -> int:
+        """Index of the root joint."""
+        return int(np.flatnonzero(self.parents < 0)[0])
+
+    def index(self, joint: str) -> int:
+        """Return the index of ``joint``; raise :class:`SkeletonError` if it is not here."""
+        try:
+            return self.joints.index(joint)
+        except ValueError:
+            raise SkeletonError(
+                f"joint '{joint}' is not in skeleton '{self.name}' "
+                f"(its joints: {', '.join(self.joints)})"
+            ) from None
+
+    def indices(self, joints: list[str] | tuple[str, ...]) -> np.ndarray:
+        """Return the indices of several joints, ``(K,) int64``."""
+        return np.array([self.index(j) for j in joints], dtype=np.int64)
+
+    @property
+    def bones(self) -> np.ndarray:
+        """Bones as ``(B, 2) int64`` rows ``(parent, child)``, in topological order."""
+        child = np.flatnonzero(self.parents >= 0)
+        return np.stack([self.parents[child], child], axis=1)
+
+    @property
+    def bone_names(self) -> tuple[str, ...]:
+        """Bone names (the child joint of each bone), ``(B,)``."""
+        return tuple(self.joints[c] for c in self.bones[:, 1])
+
+    def children(self, joint: int) -> np.ndarray:
+        """Indices of the children of joint index ``joint``."""
+        return np.flatnonzero(self.parents == joint)
+
+    def finger_chain(self, finger: str) -> np.ndarray:
+        """Joint indices of ``finger`` from its base to its tip, ``(K,) int64``."""
+        return np.array([i for i, f in enumerate(self.fingers) if f == finger], dtype=np.int64)
+
+    def depth(self) -> np.ndarray:
+        """Number of bones between each joint and the root, ``(J,) int64``."""
+        depth = np.zeros(self.n_joints, dtype=np.int64)
+        for j in range(self.n_joints):
+            if self.parents[j] >= 0:
+                depth[j] = depth[self.parents[j]] + 1
+        return depth
+
+    def role_of(self, joint: str) -> str:
+        """Anatomical role of ``joint``."""
+        return self.roles[self.index(joint)]
+
+
+def _parse(doc: dict, source: Path) -> Skeleton:
+    try:
+        joints = doc["joints"]
+        names = [j["name"] for j in joints]
+        parent_names = [j["parent"] for j in joints]
+        fingers = [j["finger"] for j in joints]
+        roles = [j["role"] for j in joints]
+    except (KeyError, TypeError) as exc:
+        raise SkeletonError(
+            f"{source}: every joint needs name, parent, finger, role ({exc})") from None
+    if len(set(names)) != len(names):
+        raise SkeletonError(f"{source}: joint names must be unique")
+    parents = np.full(len(names), -1, dtype=np.int64)
+    for i, p in enumerate(parent_names):
+        if p is None:
+            continue
+        if p not in names[:i]:
+            raise SkeletonError(
+                f"{source}: joint '{names[i]}' lists parent '{p}', which must be a joint "
+                "listed before it"
+            )
+        parents[i] = names.index(p)
+    if int((parents < 0).sum()) != 1:
+        raise SkeletonError(f"{source}: a skeleton has exactly one root (parent null)")
+    for f in fingers:
+        if f not in (*FINGERS, "palm"):
+            raise SkeletonError(f"{source}: unknown finger '{f}'")
+    ref = doc.get("reference_lengths") or {}
+    return Skeleton(
+        name=doc["name"],
+        joints=tuple(names),
+        parents=parents,
+        fingers=tuple(fingers),
+        roles=tuple(roles),
+        ids=tuple(int(j.get("id", i)) for i, j in enumerate(joints)),
+        source_names=tuple(str(j.get("source_name", j["name"])) for j in joints),
+        description=doc.get("description", ""),
+        reference_lengths={k: float(v) for k, v in ref.get("bones", {}).items()},
+        reference_units=ref.get("units"),
+    )
+
+
+def available_skeletons() -> tuple[str, ...]:
+    """Names of the presets in ``schemas/skeletons``."""
+    return tuple(sorted(p.stem for p in SKELETONS_DIR.glob("*.json")))
+
+
+@cache
+def load_skeleton(name: str) -> Skeleton:
+    """Load the preset ``name`` from ``schemas/skeletons/<name>.json``.
+
+    Raises
+    ------
+    SkeletonError
+        If there is no such preset or its file is inconsistent.
+    """
+    path = SKELETONS_DIR / f"{name}.json"
+    if not isinstance(name, str) or "/" in name or not path.is_file():
+        raise SkeletonError(
+            f"unknown skeleton '{name}'; known presets: {', '.join(available_skeletons())}"
+        )
+    with path.open() as fh:
+        return _parse(json.load(fh), path)
+
+
+def frame_bone_lengths(positions: np.ndarray, skeleton: Skeleton) -> np.ndarray:
+    """Length of every bone in every frame.
+
+    Parameters
+    ----------
+    positions
+        ``(T, J, D) float64`` joint positions (``D`` = 3, or 2 for image points), any
+        unit; NaN where missing.
+    skeleton
+        The skeleton of the joint axis.
+
+    Returns
+    -------
+    np.ndarray
+        ``(T, J) float64``: length of the bone ending at each joint, in the unit of
+        ``positions``; NaN for the root and where either end is missing.
+    """
+    lengths = np.full(positions.shape[:2], np.nan)
+    parent, child = skeleton.bones.T
+    lengths[:, child] = np.linalg.norm(positions[:, child] - positions[:, parent], axis=-1)
+    return lengths

@@ -1,0 +1,50 @@
+"""Readers of the inbox: raw 2D tracks in every supported format, and ground truth.
+
+The formats register themselves in :mod:`handdb.ingest.registry`; ``docs/input-formats.md``
+describes each exactly. Typical use::
+
+    scan = discover(inbox)
+    for entry in scan.clips:
+        clip = load_clip(entry)            # raises InputError on bad input
+        tracks = tracks_2d_table(clip)
+"""
+
+from handdb.ingest import (
+    c3d,
+    dlc,
+    markers_csv,
+    maya,
+    mediapipe,
+    openpose,
+    tracks_csv,
+    truth_csv,
+)
+from handdb.ingest.clip_tables import tracks_2d_table, truth_3d_table
+from handdb.ingest.inbox import ClipEntry, InboxScan, content_hash, discover, load_clip
+from handdb.ingest.observations import Observations, Positions
+from handdb.ingest.registry import (
+    InputFormat,
+    get_format,
+    register_format,
+    registered_formats,
+)
+
+for _module in (tracks_csv, openpose, dlc, mediapipe, maya, truth_csv, markers_csv, c3d):
+    register_format(_module.FORMAT)
+del _module
+
+__all__ = [
+    "ClipEntry",
+    "InboxScan",
+    "InputFormat",
+    "Observations",
+    "Positions",
+    "content_hash",
+    "discover",
+    "get_format",
+    "load_clip",
+    "register_format",
+    "registered_formats",
+    "tracks_2d_table",
+    "truth_3d_table",
+]

@@ -1,0 +1,250 @@
+"""Finding clips in the inbox and loading each into a :class:`~handdb.clip.Clip`.
+
+:func:`discover` groups the inbox's entries by clip id: a clip is its sidecar
+``<clip_id>.clip.json``, exactly one track file (any registered ``tracks`` format) and at
+most one source of ground truth. Entries that cannot form a clip are refused with an
+:class:`~handdb.errors.InputError` each; entries of other kinds (X-ray tables, marker
+files) are handed over by format name; anything else is ignored. :func:`load_clip` then
+reads one clip into dense arrays.
+"""
+
+from __future__ import annotations
+
+import hashlib
+from collections import defaultdict
+from collections.abc import Iterator, Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from handdb.clip import Clip, parse_sidecar, validate_clip_id
+from handdb.errors import InputError
+from handdb.hand.skeletons import load_skeleton
+from handdb.ingest.observations import Observations, Positions
+from handdb.ingest.registry import (
+    CLIP_KINDS,
+    DATA_KINDS,
+    MARKERS_KIND,
+    SIDECAR_SUFFIX,
+    get_format,
+    match_format,
+    registered_formats,
+)
+
+SIDECAR = "sidecar"
+
+
+@dataclass(frozen=True)
+class ClipEntry:
+    """The inbox entries of one clip.
+
+    Attributes
+    ----------
+    clip_id
+        The clip's id, the common prefix of its file names.
+    inbox
+        The inbox folder (file names in the content hash are relative to it).
+    sidecar
+        ``<clip_id>.clip.json``.
+    tracks
+        The track file (or folder).
+    track_format
+        Name of the registered format of ``tracks``.
+    truth
+        The ground-truth file, or ``None``.
+    truth_format
+        Name of the registered format of ``truth``, or ``None``.
+    """
+
+    clip_id: str
+    inbox: Path
+    sidecar: Path
+    tracks: Path
+    track_format: str
+    truth: Path | None = None
+    truth_format: str | None = None
+
+    @property
+    def paths(self) -> tuple[Path, ...]:
+        """The clip's inputs: sidecar, tracks, then truth if any."""
+        return (self.sidecar, self.tracks) + ((self.truth,) if self.truth else ())
+
+
+@dataclass(frozen=True)
+class InboxScan:
+    """What :func:`discover` found in an inbox.
+
+    Attributes
+    ----------
+    clips
+        One entry per complete clip, by clip id.
+    refused
+        One error per entry that cannot be read as part of a clip.
+    others
+        Inputs of other kinds by format name (``xray``, ``markers_csv``, ...).
+    """
+
+    clips: tuple[ClipEntry, ...]
+    refused: tuple[InputError, ...]
+    others: Mapping[str, tuple[Path, ...]] = field(default_factory=dict)
+
+
+def _entries(inbox: Path) -> Iterator[tuple[str, str, str, Path]]:
+    """Yield ``(kind, format name, clip id, path)`` for every recognised entry."""
+    for path in sorted(inbox.iterdir()):
+        if path.name.startswith("."):
+            continue
+        if path.name.endswith(SIDECAR_SUFFIX) and path.is_file():
+            yield SIDECAR, SIDECAR, path.name.removesuffix(SIDECAR_SUFFIX), path
+        elif (match := match_format(path)) is not None:
+            fmt, clip_id = match
+            yield fmt.kind, fmt.name, clip_id, path
+
+
+def _assemble(clip_id: str, inbox: Path,
+              found: dict[str, list[tuple[str, Path]]]) -> ClipEntry | list[InputError]:
+    """Make one clip of the entries found for ``clip_id``, or say why not."""
+    sidecars, truths = found[SIDECAR], found["truth"]
+    tracks = [entry for kind in DATA_KINDS for entry in found[kind]]
+    track_suffixes = ", ".join(f.suffix for f in registered_formats() if f.kind in DATA_KINDS)
+    if not sidecars:
+        return [InputError(path, f"has no sidecar: add {clip_id}{SIDECAR_SUFFIX} (skeleton, "
+                           "hand, fps, subject, units, camera) next to it", clip_id=clip_id)
+                for _, path in tracks + truths]
+    if not tracks:
+        return [InputError(sidecars[0][1], f"clip '{clip_id}' has no track file: add "
+                           f"{clip_id}<suffix> with one of the suffixes {track_suffixes}",
+                           clip_id=clip_id)]
+    if len(tracks) > 1:
+        names = " and ".join(path.name for _, path in tracks)
+        return [InputError(tracks[1][1], f"clip '{clip_id}' has two track files, {names}; "
+                           "keep exactly one", clip_id=clip_id)]
+    (track_format, track_path), = tracks
+    truth_sources = truths + ([(track_format, track_path)]
+                              if get_format(track_format).read_truth else [])
+    if len(truth_sources) > 1:
+        names = " and ".join(path.name for _, path in truth_sources)
+        return [InputError(truths[0][1], f"clip '{clip_id}' has two sources of ground "
+                           f"truth, {names}; keep one", clip_id=clip_id)]
+    truth_format, truth_path = truths[0] if truths else (None, None)
+    return ClipEntry(clip_id=clip_id, inbox=inbox, sidecar=sidecars[0][1], tracks=track_path,
+                     track_format=track_format, truth=truth_path, truth_format=truth_format)
+
+
+def discover(inbox: str | Path) -> InboxScan:
+    """Group the entries of ``inbox`` into clips.
+
+    Raises
+    ------
+    InputError
+        If ``inbox`` is not a folder.
+    """
+    inbox = Path(inbox)
+    if not inbox.is_dir():
+        raise InputError(inbox, "is not a folder; give the inbox holding the clips' files")
+    grouped: dict[str, dict[str, list[tuple[str, Path]]]] = defaultdict(
+        lambda: defaultdict(list))
+    others: dict[str, list[Path]] = defaultdict(list)
+    refused: list[InputError] = []
+    for kind, format_name, clip_id, path in _entries(inbox):
+        if kind not in (SIDECAR, *CLIP_KINDS):
+            others[format_name].append(path)
+            continue
+        try:
+            validate_clip_id(clip_id, path)
+        except InputError as exc:
+            refused.append(exc)
+            continue
+        grouped[clip_id][kind].append((format_name, path))
+    clips = []
+    for clip_id in sorted(grouped):
+        outcome = _assemble(clip_id, inbox, grouped[clip_id])
+        if isinstance(outcome, ClipEntry):
+            clips.append(outcome)
+        else:
+            refused.extend(outcome)
+    return InboxScan(clips=tuple(clips), refused=tuple(refused),
+                     others={name: tuple(paths) for name, paths in others.items()})
+
+
+def _files(path: Path) -> list[Path]:
+    """``path`` itself, or the visible files under the folder ``path`` in name order."""
+    if not path.is_dir():
+        return [path]
+    return sorted(p for p in path.rglob("*")
+                  if p.is_file() and not any(part.startswith(".") for part in
+                                             p.relative_to(path).parts))
+
+
+def content_hash(entry: ClipEntry) -> str:
+    """SHA-256 (hex) over the clip's input files: their names and bytes, in a fixed order.
+
+    The sidecar comes first, then the track file (a folder's files in name order), then
+    the truth file; each contributes its path relative to the inbox, its size and its
+    bytes, so renaming, editing or moving bytes between files changes the hash.
+    """
+    digest = hashlib.sha256()
+    for path in entry.paths:
+        for file in _files(path):
+            data = file.read_bytes()
+            digest.update(file.relative_to(entry.inbox).as_posix().encode() + b"\0")
+            digest.update(f"{len(data)}\0".encode() + data)
+    return digest.hexdigest()
+
+
+def _dense(rows: Observations | Positions, values: np.ndarray, n_frames: int) -> np.ndarray:
+    """Scatter per-row ``values`` ``(N, ...)`` into ``(T, J, ...)``, NaN elsewhere."""
+    dense = np.full((n_frames, rows.skeleton.n_joints) + values.shape[1:], np.nan)
+    dense[rows.frame, rows.joint] = values
+    return dense
+
+
+def load_clip(entry: ClipEntry) -> Clip:
+    """Read one clip: sidecar, tracks and ground truth, as dense arrays.
+
+    ``T`` is the number of frames the track file spans (for the ground truth too, if it
+    runs longer).
+
+    Raises
+    ------
+    InputError
+        For the first problem in any of the clip's files, with ``clip_id`` set.
+    """
+    try:
+        track_format = get_format(entry.track_format)
+        three_d = track_format.kind == MARKERS_KIND
+        spec = parse_sidecar(entry.sidecar, entry.clip_id, three_d=three_d)
+        skeleton = load_skeleton(spec.skeleton)
+        observations = track_format.read(entry.tracks, spec, skeleton)
+        points = observations.xyz if three_d else observations.uv
+        if not np.isfinite(points).all(axis=1).any():
+            raise InputError(entry.tracks, "holds no point of the hand in any frame")
+        if entry.truth_format is not None:
+            truth_rows = get_format(entry.truth_format).read(entry.truth, spec, skeleton)
+        elif track_format.read_truth is not None:
+            truth_rows = track_format.read_truth(entry.tracks, spec, skeleton)
+        else:
+            truth_rows = None
+        hash_hex = content_hash(entry)
+    except InputError as exc:
+        exc.clip_id = exc.clip_id or entry.clip_id
+        raise
+    except OSError as exc:
+        raise InputError(exc.filename or entry.tracks, f"cannot be read: {exc.strerror}",
+                         clip_id=entry.clip_id) from exc
+    n_frames = max(observations.n_frames, truth_rows.n_frames if truth_rows else 0)
+    no_points = np.full((n_frames, skeleton.n_joints), np.nan)
+    return Clip(
+        spec=spec,
+        skeleton=skeleton,
+        uv=(np.stack([no_points, no_points], axis=-1) if three_d
+            else _dense(observations, observations.uv, n_frames)),
+        confidence=no_points if three_d else _dense(observations, observations.confidence,
+                                                    n_frames),
+        truth=_dense(truth_rows, truth_rows.xyz, n_frames) if truth_rows else None,
+        markers=_dense(observations, observations.xyz, n_frames) if three_d else None,
+        source_format=track_format.name,
+        source_files=tuple(str(path) for path in entry.paths),
+        content_hash=hash_hex,
+    )

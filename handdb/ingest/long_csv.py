@@ -1,0 +1,130 @@
+"""Shared reading of long-form CSV files: one row per (frame, joint), named columns.
+
+Used by the canonical track format (``frame,joint,u,v[,confidence]``) and the two 3D
+formats, ground truth and 3D markers (``frame,joint,x,y,z``).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pyarrow as pa
+
+from handdb.clip import ClipSpec
+from handdb.errors import InputError
+from handdb.hand.skeletons import Skeleton
+from handdb.ingest.delimited import (
+    DelimitedTable,
+    TextLines,
+    read_bytes,
+    read_delimited,
+    split_header,
+    write_csv,
+)
+from handdb.ingest.observations import (
+    Positions,
+    resolve_joints,
+    single_file_rows,
+    unknown_joint,
+)
+
+
+def read_long_csv(path: Path, required: tuple[str, ...],
+                  optional: tuple[str, ...] = ()) -> DelimitedTable:
+    """Read a CSV whose header names ``required`` and possibly ``optional`` columns.
+
+    Raises
+    ------
+    InputError
+        For an empty file, a header that lacks a required column or names an unknown or
+        repeated one, a file without data rows, or a row with the wrong number of cells.
+    """
+    data = read_bytes(path)
+    lines = TextLines.of(data)
+    header_line = int(lines.nonblank[0])
+    header = split_header(data[lines.start[header_line - 1]:lines.end[header_line - 1]], ",")
+    accepted = ", ".join(required) + "".join(f"[, {name}]" for name in optional)
+    for name in header:
+        if name not in required + optional:
+            raise InputError(path, f"unknown column '{name}'; the header must be {accepted}",
+                             line=header_line, field=name)
+        if header.count(name) > 1:
+            raise InputError(path, "column named twice in the header", line=header_line,
+                             field=name)
+    for name in required:
+        if name not in header:
+            raise InputError(path, f"the header lacks column '{name}'; it must be {accepted}",
+                             line=header_line, field=name)
+    table = read_delimited(path, data, names=header, header_lines=1)
+    if not table.n_rows:
+        raise InputError(path, "has a header but no data rows", line=header_line)
+    return table
+
+
+def joint_column(table: DelimitedTable, column: str, spec: ClipSpec,
+                 skeleton: Skeleton) -> np.ndarray:
+    """Joint index of each row, ``(N,) int64``, from the joint names in ``column``.
+
+    Raises
+    ------
+    InputError
+        At the first row whose name is neither canonical nor mapped by ``joint_map``.
+    """
+    names, codes = table.dictionary(column)
+    indices = resolve_joints(names, spec, skeleton)
+    unknown = np.flatnonzero(indices[codes] < 0)
+    if unknown.size:
+        row = int(unknown[0])
+        raise unknown_joint(str(table.path), names[codes[row]], spec, skeleton,
+                            line=int(table.line[row]), field=column)
+    return indices[codes]
+
+
+#: Columns of the long-form 3D formats (ground truth, 3D markers).
+POSITION_COLUMNS = ("frame", "joint", "x", "y", "z")
+
+
+def read_positions(path: str | Path, spec: ClipSpec, skeleton: Skeleton) -> Positions:
+    """Read a long-form 3D CSV file (``frame,joint,x,y,z``) into positions, clip units.
+
+    Raises
+    ------
+    InputError
+        Naming the line and column of the first bad cell: an unknown column, a frame
+        that is not a whole number or is negative, an unknown joint, an empty or
+        non-numeric coordinate, a joint given twice in a frame.
+    """
+    path = Path(path)
+    table = read_long_csv(path, POSITION_COLUMNS)
+    frame = table.frames("frame")
+    source, files = single_file_rows(path, table.n_rows)
+    return Positions(
+        frame=frame,
+        joint=joint_column(table, "joint", spec, skeleton),
+        xyz=np.stack([table.numbers(axis, allow_empty=False) for axis in "xyz"], axis=1),
+        line=table.line,
+        source=source,
+        files=files,
+        skeleton=skeleton,
+        n_frames=int(frame.max()) + 1,
+    )
+
+
+def write_positions(path: str | Path, xyz: np.ndarray, skeleton: Skeleton) -> None:
+    """Write a long-form 3D CSV file: one row per finite point.
+
+    Parameters
+    ----------
+    path
+        The file to write.
+    xyz
+        ``(T, J, 3) float64`` in the clip's units; NaN points get no row.
+    skeleton
+        The skeleton ordering the joint axis.
+    """
+    frame, joint = np.nonzero(np.isfinite(xyz).all(axis=-1))
+    columns = {"frame": pa.array(frame, pa.int64()),
+               "joint": pa.array(np.asarray(skeleton.joints)[joint])}
+    columns.update({axis: pa.array(xyz[frame, joint, k]) for k, axis in enumerate("xyz")})
+    write_csv(path, columns)

@@ -1,0 +1,294 @@
+"""Subject calibration: a hand's bone lengths from its own marker track (Zhao, Chai & Xu, §4).
+
+A few frames with many visible markers are fitted together: the bone lengths, the shape
+of the palm and one pose per frame are the unknowns of one nonlinear least-squares problem
+solved by Levenberg–Marquardt (:func:`scipy.optimize.least_squares`, ``method="lm"``). LM
+takes neither bounds nor a robust loss, so the calibration poses are free of joint limits
+and the frames are chosen where markers are plentiful and clean. The residuals are
+
+* every visible marker's error (the model's markers sit on its joints);
+* ``sqrt(λ1)·(s − s̄)``, the paper's pull of the bone lengths towards ``s̄``, the median
+  distance between the markers at each bone's ends;
+* the X-ray ratio prior: each phalanx's share of its finger, ``(s_b / Σ_finger s −
+  mean_b) / std_b`` (:func:`handdb.lengths.ratios.bone_ratios` of the Chaudhry et al. statistics);
+* a weak pull of each palm bone's direction towards the template hand, which fixes the
+  rotation that palm shape and root orientation could otherwise trade.
+
+The paper also calibrates each marker's offset from its joint. Here the markers are the
+joints (the ``mediapipe21`` marker set), so that freedom goes to the palm's shape instead,
+which the template cannot know. Every length is in millimetres.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.optimize import least_squares
+
+from handdb.clip import METERS_PER_UNIT
+from handdb.hand.model import N_DOF, HandModel, forward_kinematics
+from handdb.lengths.bone_lengths import BoneLengths
+from handdb.lengths.ratios import bone_ratios, joint_ratios, table1_measurements
+from handdb.markers.solve import SOLVER_TOLERANCE, fit_pose_lsq, initial_pose
+
+#: Calibration frames fitted together.
+CALIBRATION_FRAMES = 12
+
+#: Weight λ1 of the pull of bone lengths towards the marker distances, per mm².
+LENGTH_PRIOR_WEIGHT = 0.05
+
+#: Weight of the X-ray ratio prior, per squared standard deviation: weak, so that a bone
+#: both of whose markers are seen is measured by them, while one seldom seen leans on it.
+RATIO_PRIOR_WEIGHT = 0.1
+
+#: Weight of the pull of palm bone directions towards the template, per mm² at the joint.
+PALM_PRIOR_WEIGHT = 0.01
+
+#: Finite-difference step of the calibration Jacobian, mm or rad.
+JACOBIAN_STEP = 1e-6
+
+#: How the ``bone_lengths`` rows describe their source.
+CALIBRATED_SOURCE = "calibrated"
+
+
+@dataclass(frozen=True)
+class Calibration:
+    """The result of a subject calibration.
+
+    Attributes
+    ----------
+    model
+        The hand model with the calibrated bone lengths and palm shape (mm).
+    frames
+        ``(N,) int64`` frames the calibration fitted.
+    poses
+        ``(N, 33)`` their fitted poses.
+    residual
+        ``(B,) float64`` root-mean-square marker error at each bone's child joint over
+        the calibration frames, mm; NaN where never visible.
+    n_frames
+        ``(B,) int64`` frames where both markers of each bone were visible (whole clip).
+    """
+
+    model: HandModel
+    frames: np.ndarray
+    poses: np.ndarray
+    residual: np.ndarray
+    n_frames: np.ndarray
+
+
+def measured_lengths(model: HandModel, markers: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Median distance between the markers at each bone's ends.
+
+    Parameters
+    ----------
+    model
+        The hand model whose lengths stand in for bones never seen.
+    markers
+        ``(T, J, 3)`` mm, NaN where missing.
+
+    Returns
+    -------
+    lengths : numpy.ndarray
+        ``(B,) float64`` mm; the model's length where a bone's markers are never both seen.
+    counts : numpy.ndarray
+        ``(B,) int64`` frames each median is taken over.
+    """
+    bones = model.skeleton.bones
+    spans = np.linalg.norm(markers[:, bones[:, 1]] - markers[:, bones[:, 0]], axis=-1)
+    counts = np.isfinite(spans).sum(axis=0)
+    with np.errstate(all="ignore"):
+        medians = np.nanmedian(np.where(counts > 0, spans, 0.0), axis=0)
+    return np.where(counts > 0, medians, model.bone_lengths), counts
+
+
+def select_frames(visible: np.ndarray, n: int = CALIBRATION_FRAMES) -> np.ndarray:
+    """Pick up to ``n`` frames rich in visible markers, spread over the clip.
+
+    Frames are ranked by their number of visible markers; among those at least as rich as
+    the ``n``-th richest, ``n`` are taken evenly in time.
+
+    Parameters
+    ----------
+    visible
+        ``(T, J) bool``.
+    n
+        Number of frames wanted.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(N,) int64`` increasing frame numbers, ``N = min(n, T)``.
+    """
+    counts = visible.sum(axis=1)
+    n = min(n, len(counts))
+    threshold = np.sort(counts)[::-1][n - 1]
+    candidates = np.flatnonzero(counts >= threshold)
+    picks = np.linspace(0, len(candidates) - 1, n).round().astype(np.int64)
+    return candidates[np.unique(picks)]
+
+
+def default_ratio_prior(model: HandModel) -> tuple[np.ndarray, np.ndarray]:
+    """Mean and standard deviation of each joint's phalanx share, ``(J,)`` each.
+
+    From the X-ray statistics of Chaudhry et al.'s Table 1 (cohort ``all``); NaN for bones
+    that are not phalanges.
+    """
+    return bone_ratios(model.skeleton, joint_ratios(table1_measurements()))
+
+
+class _Problem:
+    """The calibration's unknowns and residuals, vectorised over leading batch axes.
+
+    Unknowns: the logarithms of the finger bone lengths (so they stay positive, which LM
+    cannot otherwise enforce), each palm joint's offset from the wrist (3 numbers; its
+    length and direction) and every calibration frame's pose.
+    """
+
+    def __init__(self, model: HandModel, markers: np.ndarray,
+                 prior_lengths: np.ndarray, ratio_prior: tuple[np.ndarray, np.ndarray]):
+        skeleton = model.skeleton
+        self.model = model
+        self.visible = np.isfinite(markers).all(axis=-1)
+        self.target = markers[self.visible]
+        self.n_frames = len(markers)
+        self.palm = model.palm_joints
+        self.palm_bones = np.searchsorted(skeleton.bones[:, 1], self.palm)
+        self.finger_bones = np.setdiff1d(np.arange(len(skeleton.bones)), self.palm_bones)
+        self.prior_lengths = prior_lengths
+        self.template_palm = model.rest_directions[self.palm] * prior_lengths[self.palm_bones, None]
+        mean, std = ratio_prior
+        child = skeleton.bones[:, 1]
+        self.ratio_bones = np.flatnonzero(np.isfinite(mean[child]) & (std[child] > 0))
+        self.ratio_mean = mean[child][self.ratio_bones]
+        self.ratio_std = std[child][self.ratio_bones]
+        fingers = np.array(skeleton.fingers)[child]
+        self.same_finger = (fingers[self.ratio_bones][:, None] == fingers[None, :]) & np.isin(
+            np.arange(len(child)), self.ratio_bones)[None, :]
+        self.n_shape = len(self.finger_bones) + 3 * len(self.palm)
+        self.frame_of_row = np.repeat(np.nonzero(self.visible)[0], 3)
+
+    def pack(self, lengths: np.ndarray, palm: np.ndarray, poses: np.ndarray) -> np.ndarray:
+        return np.concatenate([np.log(lengths[self.finger_bones]), palm.ravel(), poses.ravel()])
+
+    def unpack(self, params: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        batch = params.shape[:-1]
+        n_fingers = len(self.finger_bones)
+        palm = params[..., n_fingers:self.n_shape].reshape(batch + (len(self.palm), 3))
+        lengths = np.empty(batch + (len(self.model.bone_lengths),))
+        lengths[..., self.finger_bones] = np.exp(params[..., :n_fingers])
+        lengths[..., self.palm_bones] = np.linalg.norm(palm, axis=-1)
+        directions = np.broadcast_to(self.model.rest_directions,
+                                     batch + self.model.rest_directions.shape).copy()
+        directions[..., self.palm, :] = palm / lengths[..., self.palm_bones, None]
+        poses = params[..., self.n_shape:].reshape(batch + (self.n_frames, N_DOF))
+        return lengths, directions, poses
+
+    def residuals(self, params: np.ndarray) -> np.ndarray:
+        lengths, directions, poses = self.unpack(params)
+        joints = forward_kinematics(self.model, poses, lengths[..., None, :],
+                                    directions[..., None, :, :])
+        markers = (joints[..., self.visible, :] - self.target).reshape(params.shape[:-1] + (-1,))
+        pull = np.sqrt(LENGTH_PRIOR_WEIGHT) * (lengths - self.prior_lengths)
+        palm = params[..., len(self.finger_bones):self.n_shape].reshape(
+            params.shape[:-1] + (len(self.palm), 3))
+        units = palm / np.linalg.norm(palm, axis=-1, keepdims=True)
+        bend = np.sqrt(PALM_PRIOR_WEIGHT) * (
+            units * self.prior_lengths[self.palm_bones, None] - self.template_palm)
+        totals = (lengths[..., None, :] * self.same_finger).sum(axis=-1)
+        shares = lengths[..., self.ratio_bones] / totals
+        ratios = np.sqrt(RATIO_PRIOR_WEIGHT) * (shares - self.ratio_mean) / self.ratio_std
+        flat_bend = bend.reshape(params.shape[:-1] + (-1,))
+        return np.concatenate([markers, pull, flat_bend, ratios], axis=-1)
+
+    def jacobian(self, params: np.ndarray) -> np.ndarray:
+        """Forward differences in one batched evaluation: pose columns of all frames at once."""
+        n_params = len(params)
+        probes = np.tile(params, (1 + self.n_shape + N_DOF, 1))
+        shape_steps = np.arange(self.n_shape)
+        probes[1 + shape_steps, shape_steps] += JACOBIAN_STEP
+        for d in range(N_DOF):
+            probes[1 + self.n_shape + d, self.n_shape + d::N_DOF] += JACOBIAN_STEP
+        values = self.residuals(probes)
+        slopes = (values[1:] - values[0]) / JACOBIAN_STEP
+        jac = np.zeros((values.shape[1], n_params))
+        jac[:, :self.n_shape] = slopes[:self.n_shape].T
+        rows = np.arange(len(self.frame_of_row))
+        for d in range(N_DOF):
+            columns = self.n_shape + self.frame_of_row * N_DOF + d
+            jac[rows, columns] = slopes[self.n_shape + d, rows]
+        return jac
+
+
+def calibrate(model: HandModel, markers: np.ndarray, *, n_frames: int = CALIBRATION_FRAMES,
+              ratio_prior: tuple[np.ndarray, np.ndarray] | None = None) -> Calibration:
+    """Estimate bone lengths and palm shape from a marker track by Levenberg–Marquardt.
+
+    Parameters
+    ----------
+    model
+        Starting hand model (its bone lengths only fill bones never seen).
+    markers
+        ``(T, J, 3)`` markers in mm, NaN where missing; the richest frames need at least
+        three visible palm or wrist markers.
+    n_frames
+        Number of calibration frames.
+    ratio_prior
+        ``(mean, std)``, ``(J,)`` each: phalanx shares of their finger
+        (:func:`handdb.lengths.ratios.bone_ratios`); default :func:`default_ratio_prior`.
+
+    Returns
+    -------
+    Calibration
+    """
+    markers = np.asarray(markers, dtype=np.float64)
+    visible = np.isfinite(markers).all(axis=-1)
+    prior_lengths, counts = measured_lengths(model, markers)
+    start_model = model.with_geometry(prior_lengths)
+    frames = select_frames(visible, n_frames)
+    chosen = markers[frames]
+    poses = np.stack([fit_pose_lsq(start_model, obs, seen, initial_pose(start_model, obs, seen),
+                                   None)
+                      for obs, seen in zip(chosen, visible[frames], strict=True)])
+    problem = _Problem(model, chosen, prior_lengths, ratio_prior or default_ratio_prior(model))
+    palm = model.rest_directions[problem.palm] * prior_lengths[problem.palm_bones, None]
+    start = problem.pack(prior_lengths, palm, poses)
+    result = least_squares(problem.residuals, start, jac=problem.jacobian, method="lm",
+                           x_scale="jac", ftol=SOLVER_TOLERANCE, xtol=SOLVER_TOLERANCE)
+    lengths, directions, fitted = problem.unpack(result.x)
+    calibrated = model.with_geometry(lengths, directions)
+    errors = np.linalg.norm(forward_kinematics(calibrated, fitted) - chosen, axis=-1)
+    children = model.skeleton.bones[:, 1]
+    with np.errstate(all="ignore"):
+        rms = np.sqrt(np.nanmean(errors[:, children] ** 2, axis=0))
+    return Calibration(model=calibrated, frames=frames, poses=fitted, residual=rms,
+                       n_frames=counts)
+
+
+def calibrated_bone_lengths(calibration: Calibration, units: str) -> BoneLengths:
+    """The calibrated bone lengths in the clip's units, with source ``calibrated``.
+
+    Parameters
+    ----------
+    calibration
+        The result of :func:`calibrate` (mm).
+    units
+        The clip's length unit; lengths and residuals are given in it.
+    """
+    mm_per_unit = METERS_PER_UNIT[units] * 1000.0
+    skeleton = calibration.model.skeleton
+    child = skeleton.bones[:, 1]
+    lengths = np.full(skeleton.n_joints, np.nan)
+    residuals = np.full(skeleton.n_joints, np.nan)
+    n_frames = np.zeros(skeleton.n_joints, dtype=np.int64)
+    lengths[child] = calibration.model.bone_lengths / mm_per_unit
+    residuals[child] = calibration.residual / mm_per_unit
+    n_frames[child] = calibration.n_frames
+    detail = (f"Levenberg-Marquardt subject calibration over {len(calibration.frames)} "
+              "marker frames with the X-ray ratio prior (Zhao et al. 2012, section 4)")
+    sources = [None if j == skeleton.root else CALIBRATED_SOURCE
+               for j in range(skeleton.n_joints)]
+    details = [None if source is None else detail for source in sources]
+    return BoneLengths(skeleton=skeleton, units=units, lengths=lengths, sources=tuple(sources),
+                       details=tuple(details), residuals=residuals, n_frames=n_frames)

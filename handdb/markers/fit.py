@@ -1,0 +1,251 @@
+"""A marker clip end to end: calibrate the subject, fit key frames, fill the frames between.
+
+This is the system of Zhao, Chai & Xu (SCA 2012) on marker data alone: subject calibration
+(§4) when the clip gives no bone lengths, sequential pose fitting of key frames (§5), and
+interpolation of the poses between key frames refined to their visible markers (§6,
+eq. 12). Markers come in clip units on the ``mediapipe21`` skeleton; fitting runs in
+millimetres, the unit of the paper's cut-off.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import pyarrow as pa
+
+from handdb.clip import METERS_PER_UNIT
+from handdb.export.rotations import JointMotion
+from handdb.hand.model import (
+    AXES,
+    ROOT_POSITION,
+    ROOT_ROTATION,
+    HandModel,
+    build_hand_model,
+    forward_kinematics,
+    local_quaternions,
+    rest_offsets,
+)
+from handdb.markers.calibration import Calibration, calibrate
+from handdb.markers.solve import (
+    SwarmSettings,
+    filter_and_refine,
+    initial_pose,
+    interpolate_poses,
+    refine_poses,
+    track,
+)
+from handdb.store import tables
+
+#: Pose solver used unless asked otherwise: least squares, which reached the swarm's
+#: accuracy many times faster (``benchmarks/bench_fitting.py``).
+DEFAULT_SOLVER = "lsq"
+
+#: Frames from one key frame to the next. The paper's key frames are its Kinect frames
+#: (a quarter of its Vicon frames); with markers alone every frame can be a key frame,
+#: which measured more accurate on fast motion (2.3 mm against 3.2 mm MPJPE with a step of
+#: 4, ``benchmarks/bench_fitting.py``); a larger step trades accuracy for speed.
+KEY_STEP = 1
+
+#: Name of the method in ``joints_3d.lift_method``.
+METHOD_NAME = "model-fit"
+
+#: Markers a frame needs for a first pose.
+MIN_START_MARKERS = 3
+
+#: Axis names of the root's orientation rows in ``joint_angles`` (rotation vector).
+ROOT_AXES = ("rotvec_x", "rotvec_y", "rotvec_z")
+
+
+@dataclass(frozen=True)
+class MarkerFit:
+    """A marker clip fitted with the hand model.
+
+    Attributes
+    ----------
+    model
+        The hand model fitted, lengths in mm.
+    poses
+        ``(T, 33) float64``: root position (mm), root rotation vector and joint angles (rad).
+    joints
+        ``(T, J, 3) float64`` joint positions from forward kinematics, clip units.
+    residual
+        ``(T, J) float64`` distance from each visible marker to its joint, clip units; NaN
+        where the marker is missing.
+    calibration
+        The subject calibration, or ``None`` when the bone lengths were given.
+    key_frames
+        ``(K,) int64`` frames fitted in sequence; the others were interpolated and refined.
+    """
+
+    model: HandModel
+    poses: np.ndarray
+    joints: np.ndarray
+    residual: np.ndarray
+    calibration: Calibration | None
+    key_frames: np.ndarray
+
+
+def key_frames(n_frames: int, step: int = KEY_STEP) -> np.ndarray:
+    """Every ``step``-th frame and the last one, ``(K,) int64``."""
+    if step < 1:
+        raise ValueError(f"key frame step must be at least 1, got {step}")
+    return np.unique(np.append(np.arange(0, n_frames, step), n_frames - 1))
+
+
+def fit_markers(markers: np.ndarray, *, hand: str = "right", units: str = "mm",
+                bone_lengths: dict[str, float] | None = None, solver: str = DEFAULT_SOLVER,
+                key_step: int = KEY_STEP, correspondence: str = "labelled",
+                filter_passes: int = 1, settings: SwarmSettings | None = None,
+                seed: int = 0) -> MarkerFit:
+    """Fit the 33-DoF hand model to a marker track.
+
+    Parameters
+    ----------
+    markers
+        ``(T, J, 3) float64`` marker positions on the ``mediapipe21`` skeleton, clip units,
+        NaN where a marker is missing.
+    hand
+        ``"right"`` or ``"left"``.
+    units
+        The clip's length unit (a key of :data:`handdb.clip.METERS_PER_UNIT`).
+    bone_lengths
+        Child joint -> length in clip units; when given, calibration is skipped and bones
+        not named keep the template length.
+    solver
+        ``"lsq"`` or ``"pso"`` for the key frames and the refinement.
+    key_step
+        Frames between key frames; 1 fits every frame in sequence.
+    correspondence
+        Marker correspondence of the swarm's marker term: ``"labelled"`` or ``"nearest"``.
+    filter_passes
+        Passes of per-frame IK plus filtering over the whole track (0 for none).
+    settings
+        Particle swarm settings (default: the paper's).
+    seed
+        Seed of the swarm's random numbers.
+
+    Returns
+    -------
+    MarkerFit
+    """
+    mm_per_unit = METERS_PER_UNIT[units] * 1000.0
+    mm = np.asarray(markers, dtype=np.float64) * mm_per_unit
+    visible = np.asarray(np.isfinite(mm).all(axis=-1), dtype=bool)
+    if bone_lengths:
+        model = build_hand_model(hand, {k: v * mm_per_unit for k, v in bone_lengths.items()})
+        calibration = None
+    else:
+        calibration = calibrate(build_hand_model(hand), mm)
+        model = calibration.model
+    rich = np.flatnonzero(visible.sum(axis=1) >= MIN_START_MARKERS)
+    if not rich.size:
+        raise ValueError(f"no frame has the {MIN_START_MARKERS} markers a first pose needs")
+    start = initial_pose(model, mm[rich[0]], visible[rich[0]])
+    rng = np.random.default_rng(seed)
+    keys = key_frames(len(mm), key_step)
+    key_poses = track(model, mm[keys], solver=solver, start=start,
+                      correspondence=correspondence, settings=settings, rng=rng)
+    between = np.setdiff1d(np.arange(len(mm)), keys)
+    poses = np.empty((len(mm), key_poses.shape[1]))
+    poses[keys] = key_poses
+    if between.size:
+        guesses = interpolate_poses(keys, key_poses, between)
+        poses[between] = refine_poses(model, mm[between], guesses, solver=solver,
+                                      settings=settings, rng=rng)
+    poses = filter_and_refine(model, mm, poses, passes=filter_passes)
+    joints = forward_kinematics(model, poses)
+    residual = np.where(visible, np.linalg.norm(joints - mm, axis=-1), np.nan)
+    return MarkerFit(model=model, poses=poses, joints=joints / mm_per_unit,
+                     residual=residual / mm_per_unit, calibration=calibration,
+                     key_frames=keys)
+
+
+def joint_motion(fit: MarkerFit, units: str = "mm") -> JointMotion:
+    """Return the fit's local joint transforms for the USD and BVH exporters (clip units).
+
+    Rotations are the model's own joint rotations (:func:`~handdb.hand.model.local_quaternions`)
+    rather than ones inferred from positions; translations are the model's bone offsets in
+    each parent's frame (``+Y`` along finger bones), the root's its world position.
+
+    Parameters
+    ----------
+    fit
+        A marker fit.
+    units
+        The clip's length unit, the unit of the translations.
+    """
+    mm_per_unit = METERS_PER_UNIT[units] * 1000.0
+    n_frames = len(fit.poses)
+    translations = np.repeat(rest_offsets(fit.model)[None] / mm_per_unit, n_frames, axis=0)
+    translations[:, fit.model.skeleton.root] = fit.poses[:, ROOT_POSITION] / mm_per_unit
+    rotations = local_quaternions(fit.model, fit.poses)
+    flips = np.sum(rotations[1:] * rotations[:-1], axis=-1) < 0
+    signs = np.concatenate([np.ones((1,) + flips.shape[1:]),
+                            np.cumprod(np.where(flips, -1.0, 1.0), axis=0)])
+    return JointMotion(rotations=rotations * signs[..., None], translations=translations)
+
+
+def joint_angles_table(clip_id: str, model: HandModel, poses: np.ndarray) -> pa.Table:
+    """Table ``joint_angles``: every joint angle of every frame, degrees.
+
+    Rows name the joint and the axis (``abduction``, ``flexion``, ``twist``); the wrist's
+    orientation in the world is given as a rotation vector (``rotvec_x`` .. ``rotvec_z``).
+
+    Parameters
+    ----------
+    clip_id
+        The clip.
+    model
+        The hand model the poses belong to.
+    poses
+        ``(T, 33)`` poses.
+    """
+    names = model.skeleton.joints
+    joint = [names[model.skeleton.root]] * len(ROOT_AXES) + [names[j] for j in model.dof_joint]
+    axis = list(ROOT_AXES) + [AXES[a] for a in model.dof_axis]
+    angles = np.degrees(np.concatenate([poses[:, ROOT_ROTATION], poses[:, 6:]], axis=1))
+    n_frames, n_angles = angles.shape
+    return tables.from_columns("joint_angles", {
+        "clip_id": clip_id,
+        "frame": np.repeat(np.arange(n_frames, dtype=np.int32), n_angles),
+        "joint": np.tile(np.array(joint), n_frames),
+        "axis": np.tile(np.array(axis), n_frames),
+        "angle_deg": angles.ravel(),
+    })
+
+
+def joints_3d_table(clip_id: str, fit: MarkerFit, observed: np.ndarray) -> pa.Table:
+    """Table ``joints_3d`` of a marker clip: the fitted joints, no image points.
+
+    Parameters
+    ----------
+    clip_id
+        The clip.
+    fit
+        The fit (joints in clip units).
+    observed
+        ``(T, J) bool``: the joint's marker was present.
+    """
+    n_frames, n_joints = observed.shape
+    xyz = fit.joints.reshape(-1, 3)
+    empty = np.full(n_frames * n_joints, np.nan)
+    return tables.from_columns("joints_3d", {
+        "clip_id": clip_id,
+        "frame": np.repeat(np.arange(n_frames, dtype=np.int32), n_joints),
+        "joint": np.tile(np.array(fit.model.skeleton.joints), n_frames),
+        "joint_index": np.tile(np.arange(n_joints, dtype=np.int32), n_frames),
+        "u": empty,
+        "v": empty,
+        "observed": observed.ravel(),
+        "confidence": empty,
+        "filled": np.zeros(n_frames * n_joints, dtype=bool),
+        "fill_method": pa.nulls(n_frames * n_joints, pa.string()),
+        "x": xyz[:, 0],
+        "y": xyz[:, 1],
+        "z": xyz[:, 2],
+        "lift_method": METHOD_NAME,
+        "scale": empty,
+        "sign_confidence": empty,
+        "length_inconsistency": empty,
+    })

@@ -1,0 +1,212 @@
+"""The database: Parquet tables in a folder, one subfolder per table.
+
+Layout under the database location (a local folder or any fsspec URL, e.g. ``s3://``)::
+
+    <db>/<table>/<key>.parquet
+
+where ``key`` is the clip id for per-clip tables, the source file stem for per-source
+tables, the run id for ``runs`` and the table name for global tables (see ``partition``
+in ``schemas/tables/*.json``). Every file is checked against its contract on write.
+
+Writes are atomic per file: a file is written aside under a temporary name that no
+reader matches (``*.parquet.tmp``) and then renamed into place. A clip's tables are
+committed with its ``clips`` row last, so a clip whose ``clips`` row carries the current
+build key is complete; a build interrupted at any point re-processes exactly the clips
+it had not committed. A build holds an exclusive lock on the database while it writes.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import fcntl
+import os
+import socket
+import uuid
+from collections.abc import Iterator
+from dataclasses import dataclass
+
+import fsspec
+import pyarrow as pa
+import pyarrow.parquet as pq
+from fsspec.implementations.local import LocalFileSystem
+
+from handdb.errors import DatabaseLockedError, StoreError
+from handdb.store import tables
+
+#: Tables holding one file per clip; a clip commit replaces all of them.
+CLIP_TABLES: tuple[str, ...] = tuple(
+    name for name in tables.table_names() if tables.table_spec(name).partition == "clip"
+)
+
+LOCK_FILE = ".lock"
+PARQUET_SUFFIX = ".parquet"
+TMP_SUFFIX = ".tmp"
+
+
+@dataclass(frozen=True)
+class Store:
+    """A handdb database at ``url`` (a folder path or an fsspec URL)."""
+
+    url: str
+
+    @property
+    def fs(self) -> fsspec.AbstractFileSystem:
+        """The filesystem the database lives on."""
+        return self._split()[0]
+
+    @property
+    def root(self) -> str:
+        """The database location within :attr:`fs`."""
+        return self._split()[1]
+
+    def _split(self) -> tuple[fsspec.AbstractFileSystem, str]:
+        fs, root = fsspec.core.url_to_fs(self.url)
+        return fs, root.rstrip("/")
+
+    @property
+    def is_local(self) -> bool:
+        """Whether the database is a folder on this machine."""
+        return isinstance(self.fs, LocalFileSystem)
+
+    def path(self, *parts: str) -> str:
+        """Path of ``parts`` under the database root, on :attr:`fs`."""
+        return "/".join([self.root, *parts])
+
+    def uri(self, *parts: str) -> str:
+        """Full URL of ``parts`` (a plain path for local databases)."""
+        path = self.path(*parts)
+        return path if self.is_local else self.fs.unstrip_protocol(path)
+
+    def table_files(self, table: str) -> list[str]:
+        """Committed Parquet files of ``table``, sorted."""
+        pattern = self.path(table, f"*{PARQUET_SUFFIX}")
+        return sorted(self.fs.glob(pattern))
+
+    def partition_path(self, table: str, key: str) -> str:
+        """Path of the file holding partition ``key`` of ``table``."""
+        return self.path(table, f"{key}{PARQUET_SUFFIX}")
+
+    def write(self, table: str, key: str, data: pa.Table) -> str:
+        """Write partition ``key`` of ``table`` atomically (aside, then rename).
+
+        The data is checked against the table's contract first; nothing is written when
+        it does not conform.
+        """
+        data = tables.conform(table, data)
+        self.fs.makedirs(self.path(table), exist_ok=True)
+        final = self.partition_path(table, key)
+        temp = f"{final}.{uuid.uuid4().hex}{TMP_SUFFIX}"
+        with self.fs.open(temp, "wb") as fh:
+            pq.write_table(data, fh, compression="zstd", write_statistics=True)
+        if self.is_local:
+            os.replace(temp, final)
+        else:
+            self.fs.mv(temp, final)
+        return final
+
+    def read(self, table: str, key: str) -> pa.Table | None:
+        """Partition ``key`` of ``table``, or ``None`` when it does not exist."""
+        path = self.partition_path(table, key)
+        if not self.fs.exists(path):
+            return None
+        with self.fs.open(path, "rb") as fh:
+            return pq.read_table(fh, schema=tables.schema(table))
+
+    def read_table(self, table: str) -> pa.Table:
+        """Every partition of ``table`` concatenated (an empty table when there is none)."""
+        parts = []
+        for path in self.table_files(table):
+            with self.fs.open(path, "rb") as fh:
+                parts.append(pq.read_table(fh, schema=tables.schema(table)))
+        if not parts:
+            return tables.empty(table)
+        return pa.concat_tables(parts)
+
+    def delete(self, table: str, key: str) -> None:
+        """Remove partition ``key`` of ``table`` if it exists."""
+        path = self.partition_path(table, key)
+        if self.fs.exists(path):
+            self.fs.rm(path)
+
+    def commit_clip(self, clip_id: str, clip_tables: dict[str, pa.Table]) -> None:
+        """Replace every per-clip table of ``clip_id`` with ``clip_tables``.
+
+        ``clip_tables`` must hold a ``clips`` row; per-clip tables it does not name are
+        removed for this clip (a clip that lost its ground truth loses its ``truth_3d``).
+        The ``clips`` row is written last: it marks the clip as complete.
+        """
+        if "clips" not in clip_tables:
+            raise StoreError(f"commit of clip '{clip_id}' has no 'clips' row")
+        unknown = sorted(set(clip_tables) - set(CLIP_TABLES))
+        if unknown:
+            raise StoreError(f"commit of clip '{clip_id}': {unknown} are not per-clip tables")
+        conformed = {name: tables.conform(name, data) for name, data in clip_tables.items()}
+        for name in CLIP_TABLES:
+            if name == "clips":
+                continue
+            if name in conformed:
+                self.write(name, clip_id, conformed[name])
+            else:
+                self.delete(name, clip_id)
+        self.write("clips", clip_id, conformed["clips"])
+
+    def clip_build_keys(self) -> dict[str, str]:
+        """``clip_id -> build_key`` of every committed clip."""
+        committed = self.read_table("clips").select(["clip_id", "build_key"]).to_pydict()
+        return dict(zip(committed["clip_id"], committed["build_key"], strict=True))
+
+    def remove_temporaries(self) -> int:
+        """Delete files left half-written by an interrupted build; return how many."""
+        leftovers = self.fs.glob(self.path("*", f"*{TMP_SUFFIX}"))
+        for path in leftovers:
+            self.fs.rm(path)
+        return len(leftovers)
+
+    @contextlib.contextmanager
+    def lock(self) -> Iterator[None]:
+        """Hold the database's exclusive build lock.
+
+        On a local database the lock is an OS file lock, released by the kernel even when
+        the build is killed. On other filesystems it is a lock file created exclusively.
+
+        Raises
+        ------
+        DatabaseLockedError
+            When another build holds the lock.
+        """
+        self.fs.makedirs(self.root, exist_ok=True)
+        path = self.path(LOCK_FILE)
+        if self.is_local:
+            with open(path, "a+") as fh:
+                try:
+                    fcntl.flock(fh, fcntl.LOCK_EX | fcntl.LOCK_NB)
+                except BlockingIOError:
+                    fh.seek(0)
+                    holder = fh.read().strip() or "another process"
+                    raise DatabaseLockedError(
+                        f"database {self.url} is being built by {holder}; wait for that "
+                        "build to finish, then run again"
+                    ) from None
+                fh.seek(0)
+                fh.truncate()
+                fh.write(f"pid {os.getpid()} on {socket.gethostname()}")
+                fh.flush()
+                try:
+                    yield
+                finally:
+                    fh.seek(0)
+                    fh.truncate()
+                    fcntl.flock(fh, fcntl.LOCK_UN)
+            return
+        try:
+            with self.fs.open(path, "xb") as fh:
+                fh.write(f"pid {os.getpid()} on {socket.gethostname()}".encode())
+        except FileExistsError:
+            raise DatabaseLockedError(
+                f"database {self.url} has a lock file {self.uri(LOCK_FILE)}: another build "
+                "is running, or one was killed; remove the file if no build is running"
+            ) from None
+        try:
+            yield
+        finally:
+            self.fs.rm(path)

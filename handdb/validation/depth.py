@@ -1,0 +1,232 @@
+"""Validation of lifted clips against ground truth (the thesis's Table 4.1, and more).
+
+Depth is compared root-relative: for truth and estimate alike, every joint's ``z`` minus
+the root's ``z`` in the same frame, so the unknown distance of the hand from the camera
+drops out. Nothing is fitted to the truth: an orthographic estimate keeps the scale its
+method derived from the bone lengths (``x = u / s``), which is already in clip units.
+The position error (MPJPE) compares root-relative ``(x, y, z)`` the same way.
+"""
+
+from __future__ import annotations
+
+import io
+from collections.abc import Mapping
+
+import numpy as np
+import pyarrow as pa
+from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.figure import Figure
+
+from handdb.clip import METERS_PER_UNIT
+from handdb.hand.skeletons import Skeleton
+from handdb.lifting.result import LiftResult
+from handdb.store import tables
+
+#: Bones whose true depth span is below this are left out of the sign accuracy, metres.
+SIGN_THRESHOLD_M = 0.005
+
+#: Comparison chart: size (inches), resolution and fixed margins (fractions of the figure).
+_CHART_INCHES = (12.0, 4.0)
+_CHART_DPI = 100
+_CHART_MARGINS = {"left": 0.06, "right": 0.99, "bottom": 0.25, "top": 0.92}
+
+
+def _xyz(estimate: LiftResult | np.ndarray) -> np.ndarray:
+    return estimate.xyz if isinstance(estimate, LiftResult) else np.asarray(estimate)
+
+
+def joint_errors(truth: np.ndarray, estimate: np.ndarray, skeleton: Skeleton,
+                 sign_threshold: float) -> dict[str, np.ndarray]:
+    """Per-joint error statistics of one estimate.
+
+    Parameters
+    ----------
+    truth, estimate
+        ``(T, J, 3) float64``, clip units, camera frame; NaN where absent.
+    skeleton
+        Gives the root and each joint's parent.
+    sign_threshold
+        Clip units: bones with a smaller true ``|dZ|`` are not counted for sign accuracy.
+
+    Returns
+    -------
+    dict
+        ``(J,)`` arrays: ``n`` (frames with both values), ``dz_min``, ``dz_max``,
+        ``dz_mean``, ``dz_std`` (of ``|ΔZ|`` root-relative, population std), ``sign_accuracy``
+        and ``n_sign`` (bone ending at the joint; NaN / 0 at the root), ``mpjpe``.
+    """
+    root = skeleton.root
+    true_rel = truth - truth[:, root : root + 1]
+    est_rel = estimate - estimate[:, root : root + 1]
+    dz = np.abs(est_rel[..., 2] - true_rel[..., 2])
+    valid = np.isfinite(dz)
+    n = valid.sum(axis=0)
+    masked = np.where(valid, dz, np.nan)
+    position = np.linalg.norm(est_rel - true_rel, axis=-1)
+
+    parents = np.where(skeleton.parents < 0, root, skeleton.parents)
+    true_bone = truth[..., 2] - truth[:, parents, 2]
+    est_bone = estimate[..., 2] - estimate[:, parents, 2]
+    counted = (np.abs(true_bone) >= sign_threshold) & np.isfinite(est_bone)
+    counted[:, root] = False
+    agree = (np.sign(true_bone) == np.sign(est_bone)) & counted
+    n_sign = counted.sum(axis=0)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        sign_accuracy = np.where(n_sign > 0, agree.sum(axis=0) / n_sign, np.nan)
+    return {
+        "n": n,
+        "dz_min": _per_column(np.nanmin, masked),
+        "dz_max": _per_column(np.nanmax, masked),
+        "dz_mean": _per_column(np.nanmean, masked),
+        "dz_std": _per_column(np.nanstd, masked),
+        "sign_accuracy": sign_accuracy,
+        "n_sign": n_sign,
+        "mpjpe": _per_column(np.nanmean, position),
+    }
+
+
+def _per_column(reduce, values: np.ndarray) -> np.ndarray:
+    """``reduce`` (NaN-aware) over axis 0 of ``(T, J)`` values; NaN for all-NaN columns."""
+    out = np.full(values.shape[1], np.nan)
+    some = np.isfinite(values).any(axis=0)
+    out[some] = reduce(values[:, some], axis=0)
+    return out
+
+
+def validation_table(clip_id: str, truth: np.ndarray,
+                     estimates: Mapping[str, LiftResult | np.ndarray], skeleton: Skeleton,
+                     units: str) -> pa.Table:
+    """Rows of ``validation_joint``: one per method and joint.
+
+    Parameters
+    ----------
+    clip_id
+        The clip.
+    truth
+        ``(T, J, 3) float64``, ``units``, camera frame.
+    estimates
+        Method name -> its :class:`LiftResult` (or ``(T, J, 3)`` positions).
+    skeleton
+        Orders the joint axis of ``truth`` and the estimates.
+    units
+        Length unit of the clip (a key of :data:`handdb.clip.METERS_PER_UNIT`).
+
+    Returns
+    -------
+    pyarrow.Table
+        Conforming to ``schemas/tables/validation_joint.json``.
+    """
+    threshold = SIGN_THRESHOLD_M / METERS_PER_UNIT[units]
+    columns: dict[str, list] = {key: [] for key in (
+        "method", "joint", "n", "dz_min", "dz_max", "dz_mean", "dz_std", "sign_accuracy",
+        "n_sign", "mpjpe")}
+    for method, estimate in estimates.items():
+        stats = joint_errors(truth, _xyz(estimate), skeleton, threshold)
+        columns["method"] += [method] * skeleton.n_joints
+        columns["joint"] += list(skeleton.joints)
+        for key, values in stats.items():
+            columns[key] += list(values)
+    root = skeleton.joints[skeleton.root]
+    columns["n_sign"] = [None if joint == root else int(n)
+                         for joint, n in zip(columns["joint"], columns["n_sign"], strict=True)]
+    return tables.from_columns("validation_joint", {
+        "clip_id": clip_id, **columns, "units": units})
+
+
+def clip_summary(table: pa.Table) -> dict[str, dict[str, float]]:
+    """Whole-clip figures per method from ``validation_joint`` rows.
+
+    Returns
+    -------
+    dict
+        Method -> ``dz_mean`` (mean ``|ΔZ|`` over every joint and frame),
+        ``sign_accuracy`` (over every counted bone and frame) and ``mpjpe``.
+    """
+    rows = table.to_pydict()
+    out: dict[str, dict[str, float]] = {}
+    methods = np.asarray(rows["method"])
+    n = np.asarray(rows["n"], dtype=float)
+    n_sign = np.asarray([v or 0 for v in rows["n_sign"]], dtype=float)
+    for method in dict.fromkeys(rows["method"]):
+        pick = methods == method
+        accuracy = np.nan_to_num(np.asarray(rows["sign_accuracy"], dtype=float))
+        out[method] = {
+            "dz_mean": float(np.sum((np.asarray(rows["dz_mean"], dtype=float) * n)[pick])
+                             / np.sum(n[pick])),
+            "sign_accuracy": float(np.sum((accuracy * n_sign)[pick]) / np.sum(n_sign[pick])),
+            "mpjpe": float(np.sum((np.asarray(rows["mpjpe"], dtype=float) * n)[pick])
+                           / np.sum(n[pick])),
+        }
+    return out
+
+
+def _number(value: float | None) -> str:
+    """Three significant digits, or a dash where a method gave no value."""
+    return "-" if value is None or not np.isfinite(value) else f"{value:.3g}"
+
+
+def markdown_summary(clip_id: str, table: pa.Table) -> str:
+    """Compare the methods on one clip in markdown (whole clip, then per joint)."""
+    units = table.column("units")[0].as_py() if table.num_rows else ""
+    summary = clip_summary(table)
+    lines = [f"## Depth validation: {clip_id}", "",
+             f"| method | mean abs dZ ({units}) | sign accuracy | MPJPE ({units}) |",
+             "|---|---:|---:|---:|"]
+    for method, figures in sorted(summary.items(), key=lambda kv: kv[1]["dz_mean"]):
+        lines.append(f"| {method} | {_number(figures['dz_mean'])} | "
+                     f"{figures['sign_accuracy']:.1%} | {_number(figures['mpjpe'])} |")
+    rows = table.to_pylist()
+    methods = list(summary)
+    lines += ["", "Mean abs dZ per joint (Table 4.1's average column):", "",
+              "| joint | " + " | ".join(methods) + " |",
+              "|---|" + "---:|" * len(methods)]
+    by_joint: dict[str, dict[str, float]] = {}
+    for row in rows:
+        by_joint.setdefault(row["joint"], {})[row["method"]] = row["dz_mean"]
+    for joint, values in by_joint.items():
+        cells = " | ".join(_number(values.get(m)) for m in methods)
+        lines.append(f"| {joint} | {cells} |")
+    return "\n".join(lines) + "\n"
+
+
+def comparison_chart(clip_id: str, table: pa.Table, skeleton: Skeleton) -> bytes:
+    """Draw a PNG bar chart of mean ``|ΔZ|`` per joint and method for one clip.
+
+    Drawn on a :class:`~matplotlib.figure.Figure` with the Agg canvas and a fixed layout
+    (no pyplot state), so charts can be made from worker threads at once.
+
+    Parameters
+    ----------
+    clip_id
+        The clip, for the title.
+    table
+        Its ``validation_joint`` rows (see :func:`validation_table`).
+    skeleton
+        Orders the joints along the x axis.
+
+    Returns
+    -------
+    bytes
+        The PNG file's content.
+    """
+    rows = table.to_pylist()
+    methods = list(dict.fromkeys(r["method"] for r in rows))
+    values = {(r["method"], r["joint"]): r["dz_mean"] for r in rows}
+    x = np.arange(skeleton.n_joints)
+    width = 0.8 / max(len(methods), 1)
+    figure = Figure(figsize=_CHART_INCHES, dpi=_CHART_DPI)
+    FigureCanvasAgg(figure)
+    figure.subplots_adjust(**_CHART_MARGINS)
+    axes = figure.add_subplot()
+    for k, method in enumerate(methods):
+        heights = [np.nan if values.get((method, joint)) is None else values[(method, joint)]
+                   for joint in skeleton.joints]
+        axes.bar(x + k * width, heights, width, label=method)
+    units = rows[0]["units"] if rows else ""
+    axes.set_xticks(x + 0.4 - width / 2, skeleton.joints, rotation=60, ha="right")
+    axes.set_ylabel(f"mean |ΔZ| root-relative ({units})")
+    axes.set_title(f"{clip_id}: depth error per joint")
+    axes.legend()
+    buffer = io.BytesIO()
+    figure.savefig(buffer, format="png")
+    return buffer.getvalue()
