@@ -233,8 +233,8 @@ def io_floor(inbox: Path, out: Path) -> Timing:
 def child_build(inbox: str, db: str) -> None:
     """Run the build flow (quick flows) and print its figures as JSON (the child side)."""
     start = time.perf_counter()
-    from flows.build import run
-    from flows.settings import quick_flows
+    from handdb_flows.build import run
+    from handdb_flows.settings import quick_flows
 
     imported = time.perf_counter()
     with quick_flows():
@@ -277,8 +277,8 @@ def child_prefect_overhead(n_clips: int) -> None:
     from prefect.cache_policies import NO_CACHE
     from prefect.task_runners import ThreadPoolTaskRunner
 
-    from flows.build import DEFAULT_WORKERS, WINDOW_PER_WORKER
-    from flows.settings import quick_flows
+    from handdb_flows.build import DEFAULT_WORKERS, WINDOW_PER_WORKER
+    from handdb_flows.settings import quick_flows
 
     @task(cache_policy=NO_CACHE)
     def stage(previous: int) -> int:

@@ -2,7 +2,7 @@
 
 Importing this package sets Prefect defaults that must be in place before Prefect starts
 (values already in the environment win): a start-up timeout long enough for the temporary
-local server (13-17 s on a new database, see ../shared/FACTS.md), no analytics, and a
+local server (13-17 s on a new database, measured), no analytics, and a
 quiet server log.
 """
 

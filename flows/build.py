@@ -29,7 +29,7 @@ from prefect.futures import PrefectFuture, wait
 from prefect.task_runners import TaskRunner, ThreadPoolTaskRunner
 from threadpoolctl import threadpool_limits
 
-from flows.settings import shared_api
+from handdb_flows.settings import shared_api
 from handdb import __version__
 from handdb.build import progress
 from handdb.build import stages as pipeline
@@ -214,7 +214,7 @@ def run(inbox: str, db: str, *, gap_fill: str | None = None, lift: str | None = 
     """Run :func:`build` on the chosen task runner.
 
     Dask runs tasks in worker processes, which report to this process's Prefect API
-    (:func:`~flows.settings.shared_api`).
+    (:func:`~handdb_flows.settings.shared_api`).
     """
     flow_ = build.with_options(task_runner=task_runner(runner, workers, dask_address))
     api = shared_api() if runner == "dask" else contextlib.nullcontext()

@@ -21,7 +21,7 @@ from prefect.futures import PrefectFuture
 from prefect.task_runners import TaskRunner, ThreadPoolTaskRunner
 from threadpoolctl import threadpool_limits
 
-from flows.build import BLAS_THREADS, DEFAULT_WORKERS
+from handdb_flows.build import BLAS_THREADS, DEFAULT_WORKERS
 from handdb.gapfill.evaluate import OCCLUSION_MASK, evaluate_clip, rmse_markdown
 from handdb.gapfill.sources import ClipSource, store_evaluation
 from handdb.store import tables

@@ -113,7 +113,7 @@ def serve_build(inbox: str, db: str, *, cron: str | None = None,
     """
     from prefect.settings import PREFECT_API_URL, temporary_settings
 
-    from flows.build import build
+    from handdb_flows.build import build
 
     parameters = {"inbox": _absolute(inbox), "db": _absolute(db)}
     with stop_on_sigterm(), prefect_api() as api_url, \

@@ -86,8 +86,8 @@ def run_build(inbox: str, db: str, *, gap_fill: str | None = None, lift: str | N
     with Store(db).lock():
         pass
 
-    from flows.build import run
-    from flows.settings import quick_flows
+    from handdb_flows.build import run
+    from handdb_flows.settings import quick_flows
     from handdb.build import progress as build_progress
 
     columns = (TextColumn("[bold]{task.description}"), BarColumn(), MofNCompleteColumn(),
@@ -206,7 +206,7 @@ def serve(
     if (cron is None) == (interval is None):
         console.print("[red]error:[/] give exactly one of --cron and --interval")
         raise typer.Exit(2)
-    from flows.serve import serve_build
+    from handdb_flows.serve import serve_build
 
     serve_build(inbox=inbox, db=db, cron=cron, interval=interval)
 

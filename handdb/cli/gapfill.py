@@ -3,7 +3,7 @@
 Clips come from the database (those whose every point is observed, e.g. the demo's
 ``rapid-s01``), an inbox (``--inbox``) or are synthesized (``--synthetic rapid``). Known
 points are hidden under each mask, filled by each method and compared with the truth, in
-the flow :mod:`flows.gapfill_eval` (one task per clip). Table ``gapfill_eval`` (one
+the flow :mod:`handdb_flows.gapfill_eval` (one task per clip). Table ``gapfill_eval`` (one
 partition per clip) and a Figure-4.6-like chart per clip (``<db>/reports/<clip_id>/
 gapfill.png``) land in the database; ``--out`` also writes them to a standalone folder.
 The command prints the RMSE of every method under every mask (pixels, over all hidden
@@ -96,8 +96,8 @@ def gapfill_eval(
         "--out", help="Also write gapfill_eval.parquet and the charts to this folder.")] = None,
 ) -> None:
     """Hide known points of full tracks, fill them with every method, print the RMSE."""
-    from flows import gapfill_eval as eval_flow
-    from flows.settings import quick_flows
+    from handdb_flows import gapfill_eval as eval_flow
+    from handdb_flows.settings import quick_flows
 
     methods = list(method or METHODS)
     masks = list(mask or DEFAULT_MASKS)

@@ -18,7 +18,6 @@ it had not committed. A build holds an exclusive lock on the database while it w
 from __future__ import annotations
 
 import contextlib
-import fcntl
 import os
 import socket
 import uuid
@@ -39,8 +38,45 @@ CLIP_TABLES: tuple[str, ...] = tuple(
 )
 
 LOCK_FILE = ".lock"
+
+#: Bytes of the lock file that the OS lock covers on Windows (``msvcrt`` locks byte
+#: ranges; a lock past the end of the file is allowed).
+_WINDOWS_LOCK_SPAN = 1 << 20
 PARQUET_SUFFIX = ".parquet"
 TMP_SUFFIX = ".tmp"
+
+
+def _try_lock(fh) -> bool:
+    """Take an exclusive OS lock on the open file ``fh`` without waiting; ``False`` if held."""
+    if os.name == "nt":
+        import msvcrt
+
+        try:
+            fh.seek(_WINDOWS_LOCK_SPAN)
+            msvcrt.locking(fh.fileno(), msvcrt.LK_NBLCK, 1)
+        except OSError:
+            return False
+        return True
+    import fcntl
+
+    try:
+        fcntl.flock(fh, fcntl.LOCK_EX | fcntl.LOCK_NB)
+    except BlockingIOError:
+        return False
+    return True
+
+
+def _unlock(fh) -> None:
+    """Release the lock :func:`_try_lock` took."""
+    if os.name == "nt":
+        import msvcrt
+
+        fh.seek(_WINDOWS_LOCK_SPAN)
+        msvcrt.locking(fh.fileno(), msvcrt.LK_UNLCK, 1)
+        return
+    import fcntl
+
+    fcntl.flock(fh, fcntl.LOCK_UN)
 
 
 @dataclass(frozen=True)
@@ -178,9 +214,7 @@ class Store:
         path = self.path(LOCK_FILE)
         if self.is_local:
             with open(path, "a+") as fh:
-                try:
-                    fcntl.flock(fh, fcntl.LOCK_EX | fcntl.LOCK_NB)
-                except BlockingIOError:
+                if not _try_lock(fh):
                     fh.seek(0)
                     holder = fh.read().strip() or "another process"
                     raise DatabaseLockedError(
@@ -196,7 +230,7 @@ class Store:
                 finally:
                     fh.seek(0)
                     fh.truncate()
-                    fcntl.flock(fh, fcntl.LOCK_UN)
+                    _unlock(fh)
             return
         try:
             with self.fs.open(path, "xb") as fh:

@@ -4,8 +4,8 @@ import hashlib
 
 import pytest
 
-from flows.build import run
-from flows.settings import quick_flows
+from handdb_flows.build import run
+from handdb_flows.settings import quick_flows
 from handdb.store.database import Store
 from handdb.store.query import query
 

@@ -26,8 +26,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from flows.build import run
-from flows.settings import quick_flows
+from handdb_flows.build import run
+from handdb_flows.settings import quick_flows
 from handdb.store.database import LOCK_FILE
 from handdb.store.query import query
 

@@ -6,8 +6,8 @@ import pytest
 from distributed import LocalCluster
 from distributed.diagnostics.plugin import SchedulerPlugin
 
-from flows.build import run
-from flows.settings import quick_flows
+from handdb_flows.build import run
+from handdb_flows.settings import quick_flows
 from handdb.store.query import query
 
 pytestmark = pytest.mark.slow

@@ -3,8 +3,8 @@
 import hashlib
 from pathlib import Path
 
-from flows.build import run
-from flows.settings import quick_flows
+from handdb_flows.build import run
+from handdb_flows.settings import quick_flows
 
 
 def file_digests(db: Path) -> dict[str, str]:

@@ -5,8 +5,8 @@ import json
 import numpy as np
 import pytest
 
-from flows.build import run
-from flows.settings import quick_flows
+from handdb_flows.build import run
+from handdb_flows.settings import quick_flows
 from handdb.export.rotations import CAMERA_TO_Y_UP
 from handdb.hand.skeletons import load_skeleton
 from handdb.ingest import get_format

@@ -14,8 +14,8 @@ import fsspec
 import pytest
 
 import handdb
-from flows.build import run
-from flows.settings import quick_flows
+from handdb_flows.build import run
+from handdb_flows.settings import quick_flows
 from handdb.errors import DatabaseLockedError
 from handdb.store.database import LOCK_FILE, Store
 

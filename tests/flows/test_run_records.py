@@ -5,8 +5,8 @@ import json
 from prefect.client.orchestration import get_client
 from prefect.client.schemas.filters import ArtifactFilter, ArtifactFilterKey
 
-from flows.build import artifact_key, run
-from flows.settings import quick_flows
+from handdb_flows.build import artifact_key, run
+from handdb_flows.settings import quick_flows
 from handdb import __version__
 from handdb.lifting import DEFAULT_METHOD as DEFAULT_LIFT
 from handdb.store.query import query

@@ -4,7 +4,7 @@ import urllib.request
 
 from prefect.settings import PREFECT_API_URL, temporary_settings
 
-from flows.settings import shared_api
+from handdb_flows.settings import shared_api
 
 
 def test_shared_api_publishes_this_process_server_and_restores_the_settings():

@@ -1,7 +1,7 @@
 """A stage that fails on one clip fails that clip only: the build finishes and says why."""
 
-from flows.build import run, summary_markdown
-from flows.settings import quick_flows
+from handdb_flows.build import run, summary_markdown
+from handdb_flows.settings import quick_flows
 from handdb.store.query import query
 
 

@@ -1,7 +1,7 @@
 from typer.testing import CliRunner
 
-from flows.gapfill_eval import gapfill_eval, summary_markdown
-from flows.settings import quick_flows
+from handdb_flows.gapfill_eval import gapfill_eval, summary_markdown
+from handdb_flows.settings import quick_flows
 from handdb.cli.gapfill import app
 from handdb.gapfill.evaluate import RANDOM_MASK, THESIS_MASK, pooled_rmse
 from handdb.gapfill.sources import DatabaseSource, SyntheticSource

@@ -4,8 +4,8 @@ from pathlib import Path
 
 import pytest
 
-from flows.build import run
-from flows.settings import quick_flows
+from handdb_flows.build import run
+from handdb_flows.settings import quick_flows
 from handdb.demo import write_demo_inbox
 
 
