@@ -16,9 +16,9 @@ from pathlib import Path
 
 import numpy as np
 
-from handdb.clip import parse_sidecar
 from handdb.hand.skeletons import load_skeleton
 from handdb.ingest import dlc, maya, openpose, tracks_csv
+from handdb.ingest.sidecar import parse_sidecar
 
 SIDECAR = {"hand": "right", "fps": 30, "subject": "bench", "units": "mm",
            "camera": {"model": "orthographic"}}

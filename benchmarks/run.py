@@ -173,12 +173,12 @@ def stage_timings(inbox: Path, db: Path) -> dict[str, Timing]:
 
     BLAS runs on one thread, as in a build (clips, not matrices, are what runs in parallel).
     """
-    from handdb.build import stages as pipeline
+    from handdb.build.plan import read_xray_inputs
     from handdb.ingest import discover
     from handdb.store.database import Store
 
     store = Store(str(db))
-    ratios, _ = pipeline.ingest_xray([], store)
+    ratios = read_xray_inputs([], store).ratios
     timings = {stage: Timing() for stage in STAGES}
     with threadpool_limits(limits=1, user_api="blas"):
         for entry in discover(inbox).clips:
@@ -189,12 +189,15 @@ def stage_timings(inbox: Path, db: Path) -> dict[str, Timing]:
 def time_clip_stages(entry: Any, inbox: Path, store: Any, ratios: pa.Table,
                      timings: dict[str, Timing]) -> None:
     """Run one clip through every stage, adding each stage's time to ``timings``."""
+    from handdb.build import BuildOptions
     from handdb.build import stages as pipeline
-    from handdb.store.quarantine import Refusal
+    from handdb.build.keys import stage_keys
+    from handdb.build.rows import clip_tables
 
-    options = pipeline.BuildOptions()
+    options = BuildOptions()
+    keys = stage_keys(entry.clip_id, options, "", marker_clip=False)
     with timed(timings["ingest"], 0):
-        result = pipeline.ingest(entry, "bench")
+        result = pipeline.ClipResult(clip=pipeline.ingest(entry), keys=keys)
     n_frames = result.clip.n_frames
     timings["ingest"].frames += n_frames
     steps: dict[str, Callable] = {
@@ -203,13 +206,15 @@ def time_clip_stages(entry: Any, inbox: Path, store: Any, ratios: pa.Table,
         "lift": lambda r: pipeline.lift_clip(r, options),
         "validate": lambda r: pipeline.validate(r, options),
         "export": lambda r: pipeline.export(r, store, options),
-        "commit": lambda r: store.commit_clip(r.clip.clip_id, pipeline.clip_tables(r, inbox)),
+        "commit": lambda r: store.commit_clip(r.clip.clip_id, clip_tables(r, inbox)),
     }
     for stage, step in steps.items():
         with timed(timings[stage], n_frames):
-            outcome = step(result)
-        if isinstance(outcome, Refusal):
-            raise RuntimeError(f"benchmark clip {entry.clip_id} refused at {stage}: {outcome}")
+            try:
+                outcome = step(result)
+            except pipeline.ClipRefused as refused:
+                raise RuntimeError(f"benchmark clip {entry.clip_id} refused at {stage}: "
+                                   f"{refused}") from refused
         result = outcome or result
 
 
@@ -233,12 +238,10 @@ def io_floor(inbox: Path, out: Path) -> Timing:
 def child_build(inbox: str, db: str) -> None:
     """Run the build flow (quick flows) and print its figures as JSON (the child side)."""
     start = time.perf_counter()
-    from handdb_flows.build import run
-    from handdb_flows.settings import quick_flows
+    from handdb.build import run_build
 
     imported = time.perf_counter()
-    with quick_flows():
-        summary = run(inbox, db, export_usd=True)
+    summary = run_build(inbox, db)
     finished = time.perf_counter()
     usage = resource.getrusage(resource.RUSAGE_SELF)
     print(json.dumps({
@@ -273,12 +276,13 @@ def build(inbox: Path, db: Path) -> dict:
 
 def child_prefect_overhead(n_clips: int) -> None:
     """Print the seconds of a flow of empty tasks shaped like the build (the child side)."""
+    from handdb_flows.build import WINDOW_PER_WORKER
+    from handdb_flows.settings import quick_flows
     from prefect import flow, task
     from prefect.cache_policies import NO_CACHE
     from prefect.task_runners import ThreadPoolTaskRunner
 
-    from handdb_flows.build import DEFAULT_WORKERS, WINDOW_PER_WORKER
-    from handdb_flows.settings import quick_flows
+    from handdb.build import DEFAULT_WORKERS
 
     @task(cache_policy=NO_CACHE)
     def stage(previous: int) -> int:

@@ -111,9 +111,8 @@ def serve_build(inbox: str, db: str, *, cron: str | None = None,
 
     Stops on Ctrl-C or SIGTERM, and then stops the local Prefect server it started.
     """
-    from prefect.settings import PREFECT_API_URL, temporary_settings
-
     from handdb_flows.build import build
+    from prefect.settings import PREFECT_API_URL, temporary_settings
 
     parameters = {"inbox": _absolute(inbox), "db": _absolute(db)}
     with stop_on_sigterm(), prefect_api() as api_url, \

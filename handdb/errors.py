@@ -54,6 +54,30 @@ class InputError(HanddbError):
         return f"{where}:{what} {self.reason}"
 
 
+class UnknownNameError(HanddbError, ValueError):
+    """A name (a method, a format, a skeleton) that no registry knows.
+
+    Parameters
+    ----------
+    kind
+        What the name should have named (``"lifting method"``).
+    name
+        The name asked for.
+    known
+        The names that are registered.
+    """
+
+    def __init__(self, kind: str, name: str, known: tuple[str, ...]) -> None:
+        self.kind = kind
+        self.name = name
+        self.known = known
+        super().__init__(f"unknown {kind} '{name}'; known: {', '.join(known)}")
+
+
+class RegistryError(HanddbError):
+    """A registry entry added twice under one name."""
+
+
 class SkeletonError(HanddbError):
     """A skeleton topology that is unknown or inconsistent."""
 

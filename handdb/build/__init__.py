@@ -1,1 +1,103 @@
-"""build."""
+"""The build: inbox → database, with or without an orchestrator.
+
+:func:`run_build` is the one entry point (the command line's ``handdb build``): it checks the
+options, plans with the library alone (:mod:`handdb.build.plan`), finishes at once when
+there is nothing to do, and otherwise runs the clips on the chosen runner: ``local`` (this
+process, :func:`build_in_process`) or an orchestrator's (:mod:`handdb.build.orchestrators`;
+Prefect's ``thread`` and ``dask``). Whatever runs them, each clip goes through
+:func:`~handdb.build.process.process_clip` and the build through :class:`Build`.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from handdb.build.options import BuildOptions
+from handdb.build.orchestrators import (
+    DEFAULT_RUNNER,
+    LOCAL_RUNNER,
+    check_runner,
+    load_orchestrator,
+    runner_names,
+    runner_orchestrator,
+)
+from handdb.build.plan import BuildPlan, PlannedClip, plan_build
+from handdb.build.process import BuildContext, StageFailed, process_clip
+from handdb.build.run import (
+    BLAS_THREADS,
+    DEFAULT_WORKERS,
+    FLOW_NAME,
+    Build,
+    BuildSummary,
+    build_in_process,
+    run_clip,
+    summary_markdown,
+)
+from handdb.errors import InputError
+from handdb.store.database import Store
+
+
+def run_build(inbox: str | Path, db: str, options: BuildOptions | None = None, *,
+              runner: str = DEFAULT_RUNNER, workers: int = DEFAULT_WORKERS,
+              address: str | None = None) -> BuildSummary:
+    """Build the database ``db`` from the inbox folder ``inbox``.
+
+    Parameters
+    ----------
+    inbox, db
+        The inbox folder; the database folder or fsspec URL.
+    options
+        What to compute (default: every sidecar's choice, else the default methods).
+    runner
+        ``local`` (this process), or a runner of an installed orchestrator
+        (:func:`~handdb.build.orchestrators.runner_names`).
+    workers
+        Clips processed at once.
+    address
+        The runner's cluster, for runners that take one (Dask's scheduler address).
+
+    Raises
+    ------
+    UnknownNameError
+        For an unknown runner or method, before anything runs.
+    InputError
+        If ``inbox`` is not a folder.
+    DatabaseLockedError
+        If another build holds the database.
+    """
+    options = (options or BuildOptions()).check()
+    check_runner(runner)
+    if not Path(inbox).is_dir():
+        raise InputError(inbox, "is not a folder: create it and put clips in it, or pass "
+                         "--inbox (or set HANDDB_INBOX)", field="inbox")
+    with Store(db).lock():
+        pass
+    plan = plan_build(inbox, db, options)
+    if plan.nothing_to_do or runner == LOCAL_RUNNER:
+        return build_in_process(inbox, db, options, workers=workers, plan=plan)
+    return runner_orchestrator(runner).build(str(inbox), db, options, runner=runner,
+                                             workers=workers, address=address)
+
+
+__all__ = [
+    "BLAS_THREADS",
+    "DEFAULT_RUNNER",
+    "DEFAULT_WORKERS",
+    "FLOW_NAME",
+    "LOCAL_RUNNER",
+    "Build",
+    "BuildContext",
+    "BuildOptions",
+    "BuildPlan",
+    "BuildSummary",
+    "PlannedClip",
+    "StageFailed",
+    "build_in_process",
+    "load_orchestrator",
+    "plan_build",
+    "process_clip",
+    "run_build",
+    "run_clip",
+    "runner_names",
+    "summary_markdown",
+]

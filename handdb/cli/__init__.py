@@ -19,7 +19,7 @@ from rich.console import Console
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 from rich.table import Table
 
-from handdb.errors import HanddbError, InputError
+from handdb.errors import HanddbError
 from handdb.paths import DEFAULT_DB, DEFAULT_INBOX
 
 app = typer.Typer(
@@ -69,34 +69,18 @@ class ClipProgress:
             self._progress.update(self._task, advance=1, description=f"{stage} {clip_id}")
 
 
-def run_build(inbox: str, db: str, *, gap_fill: str | None = None, lift: str | None = None,
-              export_usd: bool = True, compare: tuple[str, ...] = (), workers: int = 4,
-              runner: str = "thread",
-              dask_address: str | None = None, quiet: bool = False):
-    """Run the build flow with a progress bar; return its summary.
-
-    The inbox and the database lock are checked before Prefect starts, so a missing inbox
-    or a build already running is reported at once.
-    """
-    from handdb.store.database import Store
-
-    if not Path(inbox).is_dir():
-        raise InputError(inbox, "is not a folder: create it and put clips in it, or pass "
-                         "--inbox (or set HANDDB_INBOX)", field="inbox")
-    with Store(db).lock():
-        pass
-
-    from handdb_flows.build import run
-    from handdb_flows.settings import quick_flows
+def run_build(inbox: str, db: str, options=None, *, workers: int = 4,
+              runner: str = "thread", dask_address: str | None = None, quiet: bool = False):
+    """Run the build (:func:`handdb.build.run_build`) with a progress bar; return its summary."""
     from handdb.build import progress as build_progress
+    from handdb.build import run_build as build_database
 
     columns = (TextColumn("[bold]{task.description}"), BarColumn(), MofNCompleteColumn(),
                TimeElapsedColumn())
     with Progress(*columns, console=console, transient=True, disable=quiet) as bar:
-        with build_progress.reporting(ClipProgress(bar)), quick_flows():
-            return run(inbox, db, gap_fill=gap_fill, lift=lift, export_usd=export_usd,
-                       compare=compare, workers=workers, runner=runner,
-                       dask_address=dask_address)
+        with build_progress.reporting(ClipProgress(bar)):
+            return build_database(inbox, db, options, runner=runner, workers=workers,
+                                  address=dask_address)
 
 
 def print_summary(summary) -> None:
@@ -131,8 +115,9 @@ def build(
         "e.g. model-fit, about a minute per clip).")] = None,
     workers: Annotated[int, typer.Option(min=1, help="Clips processed in parallel.")] = 4,
     runner: Annotated[str, typer.Option(
-        help="Task runner: thread, or dask (a local cluster unless --dask-address is "
-        "given).")] = "thread",
+        help="Where clips run: thread (Prefect tasks in this process), dask (Prefect tasks "
+        "on a local Dask cluster unless --dask-address is given), or local (this process, "
+        "without Prefect).")] = "thread",
     dask_address: Annotated[str | None, typer.Option(
         help="Address of an existing Dask scheduler.")] = None,
 ) -> None:
@@ -141,9 +126,12 @@ def build(
     Exit status: 0 when every clip went through, 3 when some inputs were quarantined
     (the rest was built), 1 when a stage failed on a clip.
     """
+    from handdb.build import BuildOptions
+
+    options = BuildOptions(gap_fill=gap_fill, lift=lift, export_usd=usd,
+                           compare=tuple(compare or ()))
     try:
-        summary = run_build(inbox, db, gap_fill=gap_fill, lift=lift, export_usd=usd,
-                            compare=tuple(compare or ()), workers=workers, runner=runner,
+        summary = run_build(inbox, db, options, workers=workers, runner=runner,
                             dask_address=dask_address)
     except HanddbError as exc:
         console.print(f"[red]error:[/] {exc}")
@@ -206,9 +194,14 @@ def serve(
     if (cron is None) == (interval is None):
         console.print("[red]error:[/] give exactly one of --cron and --interval")
         raise typer.Exit(2)
-    from handdb_flows.serve import serve_build
+    from handdb.build import load_orchestrator
 
-    serve_build(inbox=inbox, db=db, cron=cron, interval=interval)
+    try:
+        orchestrator = load_orchestrator()
+    except HanddbError as exc:
+        console.print(f"[red]error:[/] {exc}")
+        raise typer.Exit(EXIT_FAILED) from None
+    orchestrator.serve(inbox, db, cron=cron, interval=interval)
 
 
 @app.command()

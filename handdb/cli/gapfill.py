@@ -30,19 +30,13 @@ from handdb.gapfill.sources import (
     database_sources,
 )
 from handdb.ingest.inbox import discover
-from handdb.paths import default_db
+from handdb.paths import DEFAULT_DB
 from handdb.store.database import Store
 
-app = typer.Typer(name="gapfill", no_args_is_help=True)
 out = Console()
 
 #: Masks used unless ``--mask`` says otherwise.
 DEFAULT_MASKS = (THESIS_MASK, RANDOM_MASK)
-
-
-@app.callback()
-def gapfill() -> None:
-    """Gap-filling evaluation."""
 
 
 def inbox_sources(inbox: Path) -> list[InboxSource]:
@@ -78,7 +72,7 @@ def _write_folder(folder: Path, rows: pa.Table, charts: dict[str, str], store: S
 def gapfill_eval(
     db: Annotated[str, typer.Option("--db", envvar="HANDDB_DB", help=(
         "Database the rows and charts go to; its clips with complete tracks are scored "
-        "unless --inbox or --synthetic is given."))] = default_db(),
+        "unless --inbox or --synthetic is given."))] = DEFAULT_DB,
     inbox: Annotated[Path | None, typer.Option(
         help="Score the clips of this inbox with complete tracks instead.")] = None,
     synthetic: Annotated[str | None, typer.Option(
@@ -94,16 +88,21 @@ def gapfill_eval(
     seed: Annotated[int, typer.Option(help="Seed of the random-gaps mask.")] = 0,
     out_dir: Annotated[Path | None, typer.Option(
         "--out", help="Also write gapfill_eval.parquet and the charts to this folder.")] = None,
+    runner: Annotated[str, typer.Option(
+        help="prefect (one Prefect task per clip) or local (this process, without "
+        "Prefect).")] = "prefect",
 ) -> None:
     """Hide known points of full tracks, fill them with every method, print the RMSE."""
-    from handdb_flows import gapfill_eval as eval_flow
-    from handdb_flows.settings import quick_flows
+    from handdb.build import load_orchestrator
+    from handdb.gapfill.sources import evaluate_sources
 
     methods = list(method or METHODS)
     masks = list(mask or DEFAULT_MASKS)
     unknown = sorted(set(methods) - set(METHODS)) + sorted(set(masks) - set(MASKS))
     if unknown:
         raise typer.BadParameter(f"unknown method or mask: {', '.join(unknown)}")
+    if runner not in ("prefect", "local"):
+        raise typer.BadParameter(f"unknown runner '{runner}': use prefect or local")
     if inbox is not None and synthetic is not None:
         raise typer.BadParameter("give at most one of --inbox and --synthetic")
     sources: list[ClipSource]
@@ -116,8 +115,10 @@ def gapfill_eval(
     if not sources:
         out.print("[red]no clip with complete tracks to evaluate[/]")
         raise typer.Exit(1)
-    with quick_flows():
-        summary = eval_flow.gapfill_eval(sources, db, masks, methods, seed)
+    if runner == "local":
+        summary = evaluate_sources(sources, db, masks, methods, seed)
+    else:
+        summary = load_orchestrator().gapfill_eval(sources, db, masks, methods, seed)
     for clip_id in summary.skipped:
         out.print(f"[yellow]skipped {clip_id}: its tracks have missing points (or its files "
                   "were refused), so hidden points could not be scored[/]")
@@ -129,5 +130,3 @@ def gapfill_eval(
     out.print(rmse_table(summary.table, masks, methods))
     out.print(f"wrote table gapfill_eval and {len(summary.charts)} chart(s) to {db}")
 
-
-app.command("gapfill-eval")(gapfill_eval)

@@ -39,7 +39,7 @@ from handdb.gapfill.interpolate import interpolate_gaps
 from handdb.gapfill.lowrank import DEFAULT_VARIANCE, blend_to_edges, lowrank_reconstruct
 from handdb.gapfill.palm_frame import palm_motion, to_image, to_palm_frame
 from handdb.gapfill.refine import refine_bone_lengths
-from handdb.gapfill.registry import OFFLINE, MethodOutput, register
+from handdb.gapfill.registry import MethodOutput
 from handdb.gapfill.regression import regression_estimates, regression_samples
 from handdb.gapfill.rigid import carry_along_chains_many, palm_joints, place_from_rest_pose
 from handdb.hand.skeletons import Skeleton
@@ -223,7 +223,6 @@ def _long_gap_fill(
     return blended
 
 
-@register("auto", OFFLINE, "default: rigid palm, PCHIP short gaps, validated chain/regression")
 def fill_auto(
     uv: np.ndarray,
     missing: np.ndarray,

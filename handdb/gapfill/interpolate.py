@@ -10,12 +10,14 @@ a joint never observed is left unfilled.
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import numpy as np
 from scipy.interpolate import CubicSpline
 
 from handdb.compiled import kernel
 from handdb.gapfill.gaps import Gaps, find_gaps
-from handdb.gapfill.registry import OFFLINE, MethodOutput, register
+from handdb.gapfill.registry import MethodOutput
 from handdb.hand.skeletons import Skeleton
 
 #: Interpolation kinds.
@@ -181,17 +183,16 @@ def interpolate_gaps(
     return filled
 
 
-def _register(kind: str, summary: str) -> None:
+def interpolation_method(kind: str) -> Callable[..., MethodOutput]:
+    """The gap-filling method that interpolates each gap with ``kind``.
+
+    See :func:`interpolate_gaps`; the method's one parameter is ``max_gap``.
+    """
+
     def fill(
         uv: np.ndarray, missing: np.ndarray, skeleton: Skeleton, *, max_gap: int | None = None
     ) -> MethodOutput:
         return MethodOutput(interpolate_gaps(uv, missing, kind, max_gap))
 
     fill.__name__ = f"fill_{kind}"
-    fill.__doc__ = f"{summary.capitalize()} (see :func:`interpolate_gaps`)."
-    register(kind, OFFLINE, summary)(fill)
-
-
-_register("linear", "linear interpolation across each gap")
-_register("cubic", "cubic spline through the observed samples")
-_register("pchip", "shape-preserving cubic (PCHIP) through the observed samples")
+    return fill

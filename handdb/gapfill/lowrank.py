@@ -22,7 +22,7 @@ import numpy as np
 
 from handdb.gapfill.gaps import Gaps, find_gaps
 from handdb.gapfill.interpolate import interpolate_gaps
-from handdb.gapfill.registry import OFFLINE, MethodOutput, register
+from handdb.gapfill.registry import MethodOutput
 from handdb.gapfill.rigid import place_from_rest_pose
 from handdb.hand.skeletons import Skeleton
 
@@ -134,7 +134,6 @@ def blend_to_edges(uv: np.ndarray, model: np.ndarray, gaps: Gaps) -> np.ndarray:
     return filled
 
 
-@register("lowrank", OFFLINE, "iterated PCA reconstruction from the other joints")
 def fill_lowrank(
     uv: np.ndarray, missing: np.ndarray, skeleton: Skeleton, *, variance: float = DEFAULT_VARIANCE
 ) -> MethodOutput:

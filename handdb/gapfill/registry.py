@@ -15,9 +15,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from handdb.errors import HanddbError
 from handdb.gapfill.gaps import find_gaps, mask_points
 from handdb.hand.skeletons import Skeleton
+from handdb.registry import Registry
 
 #: Flag kinds. A gap at the start of the clip (the joint is missing in the first frame).
 LEADING = "leading"
@@ -37,10 +37,6 @@ DEFAULT_METHOD = "auto"
 THESIS = "thesis"
 #: Family of the offline methods (frames after a gap are known).
 OFFLINE = "offline"
-
-
-class UnknownMethodError(HanddbError, ValueError):
-    """A gap-filling method name that is not registered."""
 
 
 @dataclass(frozen=True)
@@ -122,22 +118,13 @@ class FillResult:
         return tuple(f for f in self.flags if f.kind == kind)
 
 
-METHODS: dict[str, MethodInfo] = {}
-
-
-def register(name: str, family: str, summary: str) -> Callable[[GapFiller], GapFiller]:
-    """Register a gap-filling function under ``name`` (decorator)."""
-
-    def decorate(fill: GapFiller) -> GapFiller:
-        METHODS[name] = MethodInfo(name, fill, family, summary)
-        return fill
-
-    return decorate
+#: Every gap-filling method by name, filled in :mod:`handdb.gapfill`.
+METHODS: Registry[MethodInfo] = Registry("gap-filling method")
 
 
 def method_names(family: str | None = None) -> tuple[str, ...]:
     """Names of the registered methods, of one family or of all, in registration order."""
-    return tuple(n for n, info in METHODS.items() if family in (None, info.family))
+    return tuple(info.name for info in METHODS.values() if family in (None, info.family))
 
 
 def _edge_flags(missing: np.ndarray, skeleton: Skeleton) -> list[GapFlag]:
@@ -194,15 +181,12 @@ def fill_gaps(
 
     Raises
     ------
-    UnknownMethodError
+    UnknownNameError
         If ``method`` is not registered.
     ValueError
         If the shapes of ``uv``, ``observed`` and ``skeleton`` disagree.
     """
-    if method not in METHODS:
-        raise UnknownMethodError(
-            f"unknown gap-filling method '{method}'; known: {', '.join(METHODS)}"
-        )
+    info = METHODS[method]
     uv = np.asarray(uv, dtype=np.float64)
     observed = np.asarray(observed, dtype=bool)
     if uv.ndim != 3 or uv.shape[1:] != (skeleton.n_joints, 2) or observed.shape != uv.shape[:2]:
@@ -214,7 +198,7 @@ def fill_gaps(
     frame, joint = mask_points(missing)
     hidden = uv.copy()
     hidden[frame, joint] = np.nan
-    output = METHODS[method].fill(hidden, missing, skeleton, **params)
+    output = info.fill(hidden, missing, skeleton, **params)
     filled_uv = uv.copy()
     filled_uv[frame, joint] = output.uv[frame, joint]
     done = np.isfinite(filled_uv[frame, joint]).all(axis=-1)

@@ -18,7 +18,7 @@ import numpy as np
 
 from handdb.compiled import kernel
 from handdb.gapfill.gaps import Gaps, find_gaps
-from handdb.gapfill.registry import OFFLINE, MethodOutput, register
+from handdb.gapfill.registry import MethodOutput
 from handdb.gapfill.rest_pose import rest_pose_2d
 from handdb.gapfill.transfer import NO_MAP, fit_map, map_points
 from handdb.hand.skeletons import Skeleton
@@ -168,7 +168,6 @@ def place_from_rest_pose(
     return filled
 
 
-@register("rigid", OFFLINE, "every missing point carried with the palm's affine motion")
 def fill_rigid(
     uv: np.ndarray, missing: np.ndarray, skeleton: Skeleton, *, affine: bool = True
 ) -> MethodOutput:

@@ -2,30 +2,40 @@
 
 Only a clip whose every point is observed can be scored: its points are hidden on purpose
 and the fill compared with them. Such clips come from three places, each named by a small
-*source* that loads the clip when asked (so a flow can pass sources to its tasks):
+*source* that loads the clip (a :class:`~handdb.clip.Clip`) when asked, so that an
+orchestrator can hand sources to its tasks:
 
 * :class:`SyntheticSource`: a synthesized clip (``synthetic-<motion>-seed<seed>``);
-* :class:`DatabaseSource`: a clip of a handdb database, read from its ``clips`` and
-  ``joints_3d`` tables (and ``truth_3d`` when present);
+* :class:`DatabaseSource`: a clip of a handdb database (:func:`~handdb.store.clips.stored_clip`);
 * :class:`InboxSource`: a clip of an inbox, read by the inbox readers.
 
-:func:`store_evaluation` writes a clip's ``gapfill_eval`` rows into a database (partition
-per clip) and its chart to ``<db>/reports/<clip_id>/gapfill.png``.
+:func:`evaluate_source` scores one source's clip and stores its ``gapfill_eval`` rows
+(partition per clip) and its chart (``<db>/reports/<clip_id>/gapfill.png``);
+:func:`evaluate_sources` does every source in this process, and :func:`summarise` gathers
+the results into an :class:`EvalSummary`.
 """
 
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 import pyarrow as pa
 
-from handdb.errors import InputError
-from handdb.gapfill.evaluate import Evaluation, plot_masks
+from handdb.clip import Clip
+from handdb.errors import InputError, StoreError
+from handdb.gapfill.evaluate import (
+    OCCLUSION_MASK,
+    Evaluation,
+    evaluate_clip,
+    plot_masks,
+    rmse_markdown,
+)
 from handdb.gapfill.registry import DEFAULT_METHOD, METHODS, THESIS
-from handdb.hand.skeletons import Skeleton, load_skeleton
 from handdb.ingest.inbox import ClipEntry, load_clip
+from handdb.store import tables
+from handdb.store.clips import stored_clip
 from handdb.store.database import Store
 
 #: Table of the evaluation's rows.
@@ -35,27 +45,13 @@ REPORTS = "reports"
 CHART = "gapfill.png"
 
 
-@dataclass(frozen=True)
-class FullClip:
-    """A clip with complete 2D tracks.
-
-    Attributes
-    ----------
-    clip_id
-        Names the clip (and its database partition).
-    uv
-        ``(T, J, 2) float64``, pixels, no NaN.
-    skeleton
-        The clip's skeleton.
-    xyz
-        ``(T, J, 3) float64`` camera-frame joints when known (needed by the occlusion
-        mask), else ``None``.
-    """
-
-    clip_id: str
-    uv: np.ndarray
-    skeleton: Skeleton
-    xyz: np.ndarray | None = None
+def _complete(clip: Clip) -> Clip | None:
+    """``clip`` with its truth dropped when incomplete, or ``None`` if a point is unobserved."""
+    if not clip.observed.all():
+        return None
+    if clip.truth is not None and not np.isfinite(clip.truth).all():
+        return replace(clip, truth=None)
+    return clip
 
 
 @dataclass(frozen=True)
@@ -72,22 +68,12 @@ class SyntheticSource:
         """``synthetic-<motion>-seed<seed>``."""
         return f"synthetic-{self.motion}-seed{self.seed}"
 
-    def load(self) -> FullClip | None:
+    def load(self) -> Clip | None:
         """Synthesize the clip."""
         from handdb.synthetic.clips import synthesize_clip
 
         clip = synthesize_clip(self.motion, self.n_frames, skeleton=self.skeleton, seed=self.seed)
-        return FullClip(self.clip_id, clip.uv, load_skeleton(self.skeleton), clip.xyz)
-
-
-def _dense(table: pa.Table, n_frames: int, n_joints: int, columns: Sequence[str]) -> np.ndarray:
-    """Scatter rows (``frame``, ``joint_index``, ``columns``) into ``(T, J, C)``, NaN elsewhere."""
-    dense = np.full((n_frames, n_joints, len(columns)), np.nan)
-    frame = table.column("frame").to_numpy()
-    joint = table.column("joint_index").to_numpy()
-    dense[frame, joint] = np.stack(
-        [table.column(c).to_numpy(zero_copy_only=False) for c in columns], axis=-1)
-    return dense
+        return clip.as_clip(self.clip_id)
 
 
 @dataclass(frozen=True)
@@ -97,25 +83,12 @@ class DatabaseSource:
     db: str
     clip_id: str
 
-    def load(self) -> FullClip | None:
-        """Read the clip's points and skeleton; ``None`` when a point is not observed."""
-        store = Store(self.db)
-        clip_row = store.read("clips", self.clip_id)
-        joints = store.read("joints_3d", self.clip_id)
-        if clip_row is None or joints is None:
+    def load(self) -> Clip | None:
+        """Read the clip back; ``None`` when a point is not observed or it is not stored."""
+        try:
+            return _complete(stored_clip(Store(self.db), self.clip_id))
+        except StoreError:
             return None
-        skeleton = load_skeleton(clip_row.column("skeleton")[0].as_py())
-        n_frames = int(clip_row.column("n_frames")[0].as_py())
-        observed = _dense(joints, n_frames, skeleton.n_joints, ["observed"])[..., 0]
-        if not (observed == 1).all():
-            return None
-        uv = _dense(joints, n_frames, skeleton.n_joints, ["u", "v"])
-        truth = store.read("truth_3d", self.clip_id)
-        xyz = None if truth is None else _dense(truth, n_frames, skeleton.n_joints,
-                                                ["x", "y", "z"])
-        if xyz is not None and not np.isfinite(xyz).all():
-            xyz = None
-        return FullClip(self.clip_id, uv, skeleton, xyz)
 
 
 @dataclass(frozen=True)
@@ -129,16 +102,12 @@ class InboxSource:
         """The inbox clip's id."""
         return self.entry.clip_id
 
-    def load(self) -> FullClip | None:
+    def load(self) -> Clip | None:
         """Read the clip; ``None`` when a point is not observed or the files are refused."""
         try:
-            clip = load_clip(self.entry)
+            return _complete(load_clip(self.entry))
         except InputError:
             return None
-        if not clip.observed.all():
-            return None
-        truth = clip.truth if clip.truth is not None and np.isfinite(clip.truth).all() else None
-        return FullClip(clip.clip_id, clip.uv, clip.skeleton, truth)
 
 
 ClipSource = SyntheticSource | DatabaseSource | InboxSource
@@ -166,7 +135,7 @@ def chart_path(store: Store, clip_id: str) -> str:
 
 
 def store_evaluation(
-    store: Store, clip: FullClip, evaluation: Evaluation, methods: Sequence[str]
+    store: Store, clip: Clip, evaluation: Evaluation, methods: Sequence[str]
 ) -> str:
     """Write a clip's ``gapfill_eval`` rows and its chart (one panel per mask) into ``store``.
 
@@ -188,3 +157,56 @@ def store_evaluation(
                    title=f"{clip.clip_id}: gap-filling error per frame")
     return path
 
+
+@dataclass
+class EvalSummary:
+    """What an evaluation did: the rows of every clip scored, and the clips skipped."""
+
+    table: pa.Table
+    charts: dict[str, str] = field(default_factory=dict)
+    skipped: list[str] = field(default_factory=list)
+
+
+def evaluate_source(source: ClipSource, db: str, masks: Sequence[str],
+                    methods: Sequence[str], seed: int) -> tuple[pa.Table, str] | None:
+    """Score one source's clip and store its rows and chart; ``None`` if it cannot be scored.
+
+    The occlusion mask needs the clip's 3D truth and is left out for clips without it.
+    """
+    clip = source.load()
+    if clip is None:
+        return None
+    usable = [m for m in masks if m != OCCLUSION_MASK or clip.truth is not None]
+    evaluation = evaluate_clip(clip.clip_id, clip.uv, clip.skeleton, masks=usable,
+                               methods=methods, xyz=clip.truth, seed=seed)
+    chart = store_evaluation(Store(db), clip, evaluation, methods)
+    return evaluation.table, chart
+
+
+def summarise(sources: Sequence[ClipSource],
+              results: Sequence[tuple[pa.Table, str] | None]) -> EvalSummary:
+    """Gather :func:`evaluate_source`'s results, in the sources' order."""
+    done = [result for result in results if result is not None]
+    return EvalSummary(
+        table=pa.concat_tables([t for t, _ in done]) if done else tables.empty(EVAL_TABLE),
+        charts={s.clip_id: r[1] for s, r in zip(sources, results, strict=True) if r},
+        skipped=[s.clip_id for s, r in zip(sources, results, strict=True) if r is None],
+    )
+
+
+def evaluate_sources(sources: Sequence[ClipSource], db: str, masks: Sequence[str],
+                     methods: Sequence[str], seed: int = 0) -> EvalSummary:
+    """Score every source's clip in this process, one after the other."""
+    return summarise(sources, [evaluate_source(s, db, masks, methods, seed) for s in sources])
+
+
+def summary_markdown(summary: EvalSummary) -> str:
+    """A markdown report: the pooled RMSE table and the clips scored or skipped."""
+    lines = ["# Gap filling: RMSE over hidden points, pixels", ""]
+    if summary.table.num_rows:
+        lines += [rmse_markdown(summary.table), ""]
+    lines.append(f"Clips scored: {', '.join(summary.charts) or 'none'}.")
+    if summary.skipped:
+        lines.append(f"Skipped (incomplete tracks or refused files): "
+                     f"{', '.join(summary.skipped)}.")
+    return "\n".join(lines)

@@ -41,7 +41,7 @@ import numpy as np
 
 from handdb.gapfill.dependency import interfinger_neighbours, intrafinger_parents
 from handdb.gapfill.gaps import find_gaps
-from handdb.gapfill.registry import SHORT_HISTORY, THESIS, GapFlag, MethodOutput, register
+from handdb.gapfill.registry import SHORT_HISTORY, GapFlag, MethodOutput
 from handdb.gapfill.rigid import carry_across_gaps, palm_joints, place_from_rest_pose
 from handdb.hand.skeletons import Skeleton
 
@@ -155,7 +155,8 @@ def extrapolate(
     return track, fallbacks
 
 
-def _thesis_method(name: str) -> Callable[..., MethodOutput]:
+def thesis_method(name: str) -> Callable[..., MethodOutput]:
+    """The gap-filling method of the thesis called ``name`` (a key of :data:`THESIS_RULES`)."""
     rule, history, dependency_map = THESIS_RULES[name]
 
     def fill(uv: np.ndarray, missing: np.ndarray, skeleton: Skeleton) -> MethodOutput:
@@ -178,12 +179,3 @@ def _thesis_method(name: str) -> Callable[..., MethodOutput]:
     fill.__doc__ = f"The thesis's method '{name}' (see :mod:`handdb.gapfill.thesis`)."
     return fill
 
-
-for _name, _summary in (
-    ("previous", "thesis method 1: the previous frame's value"),
-    ("previous-diff", "thesis method 2: the last frame-to-frame change applied again"),
-    ("interfinger", "thesis method 3: method 2, reversed when the neighbouring finger turns"),
-    ("intrafinger", "thesis method 4: method 2, reversed when the parent joint turns"),
-    ("intrafinger-rate", "thesis method 5: the parent joint's last change applied"),
-):
-    register(_name, THESIS, _summary)(_thesis_method(_name))

@@ -1,7 +1,7 @@
 """Readers of the inbox: raw 2D tracks in every supported format, and ground truth.
 
-The formats register themselves in :mod:`handdb.ingest.registry`; ``docs/input-formats.md``
-describes each exactly. Typical use::
+Every format is registered here, in one place (:data:`handdb.ingest.registry.FORMATS`);
+``docs/input-formats.md`` describes each exactly. Typical use::
 
     scan = discover(inbox)
     for entry in scan.clips:
@@ -18,9 +18,17 @@ from handdb.ingest import (
     openpose,
     tracks_csv,
     truth_csv,
+    xray,
 )
 from handdb.ingest.clip_tables import tracks_2d_table, truth_3d_table
-from handdb.ingest.inbox import ClipEntry, InboxScan, content_hash, discover, load_clip
+from handdb.ingest.inbox import (
+    ClipEntry,
+    InboxScan,
+    clip_content_hash,
+    discover,
+    inbox_relative,
+    load_clip,
+)
 from handdb.ingest.observations import Observations, Positions
 from handdb.ingest.registry import (
     InputFormat,
@@ -29,9 +37,13 @@ from handdb.ingest.registry import (
     registered_formats,
 )
 
-for _module in (tracks_csv, openpose, dlc, mediapipe, maya, truth_csv, markers_csv, c3d):
+for _module in (tracks_csv, openpose, dlc, mediapipe, maya, truth_csv, markers_csv, c3d, xray):
     register_format(_module.FORMAT)
 del _module
+
+#: Version of reading the inbox's files into a clip. Raise it when a change alters the output; it
+#: enters the build keys (:mod:`handdb.build.keys`), a docstring edit or a speed-up does not.
+VERSION = 1
 
 __all__ = [
     "ClipEntry",
@@ -39,7 +51,8 @@ __all__ = [
     "InputFormat",
     "Observations",
     "Positions",
-    "content_hash",
+    "clip_content_hash",
+    "inbox_relative",
     "discover",
     "get_format",
     "load_clip",

@@ -19,7 +19,7 @@ from handdb.clip import METERS_PER_UNIT, ClipSpec
 from handdb.errors import InputError
 from handdb.hand.skeletons import Skeleton
 from handdb.ingest.observations import Positions, resolve_joints, single_file_rows
-from handdb.ingest.registry import MARKERS_KIND, InputFormat, register_format
+from handdb.ingest.registry import MARKERS_KIND, InputFormat
 
 #: The C3D parameter that names the point units.
 UNITS_PARAMETER = "POINT:UNITS"
@@ -116,5 +116,5 @@ def write(path: str | Path, markers: np.ndarray, skeleton: Skeleton, *, units: s
         writer.write(handle)
 
 
-FORMAT = register_format(InputFormat(name="c3d", suffix=".c3d", kind=MARKERS_KIND, read=read,
-                                     write=write))
+FORMAT = InputFormat(name="c3d", suffix=".c3d", kind=MARKERS_KIND, read=read,
+                                     write=write)

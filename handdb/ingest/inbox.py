@@ -18,7 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
-from handdb.clip import Clip, parse_sidecar, validate_clip_id
+from handdb.clip import Clip
 from handdb.errors import InputError
 from handdb.hand.skeletons import load_skeleton
 from handdb.ingest.observations import Observations, Positions
@@ -31,6 +31,7 @@ from handdb.ingest.registry import (
     match_format,
     registered_formats,
 )
+from handdb.ingest.sidecar import parse_sidecar, validate_clip_id
 
 SIDECAR = "sidecar"
 
@@ -168,6 +169,14 @@ def discover(inbox: str | Path) -> InboxScan:
                      others={name: tuple(paths) for name, paths in others.items()})
 
 
+def inbox_relative(path: str | Path, inbox: str | Path) -> str:
+    """``path`` relative to ``inbox`` (POSIX separators), or as given when outside it."""
+    try:
+        return Path(path).resolve().relative_to(Path(inbox).resolve()).as_posix()
+    except ValueError:
+        return str(path)
+
+
 def _files(path: Path) -> list[Path]:
     """``path`` itself, or the visible files under the folder ``path`` in name order."""
     if not path.is_dir():
@@ -177,7 +186,7 @@ def _files(path: Path) -> list[Path]:
                                              p.relative_to(path).parts))
 
 
-def content_hash(entry: ClipEntry) -> str:
+def clip_content_hash(entry: ClipEntry) -> str:
     """SHA-256 (hex) over the clip's input files: their names and bytes, in a fixed order.
 
     The sidecar comes first, then the track file (a folder's files in name order), then
@@ -200,11 +209,12 @@ def _dense(rows: Observations | Positions, values: np.ndarray, n_frames: int) ->
     return dense
 
 
-def load_clip(entry: ClipEntry) -> Clip:
+def load_clip(entry: ClipEntry, content_hash: str | None = None) -> Clip:
     """Read one clip: sidecar, tracks and ground truth, as dense arrays.
 
     ``T`` is the number of frames the track file spans (for the ground truth too, if it
-    runs longer).
+    runs longer). ``content_hash`` is the clip's :func:`content_hash` when the caller has
+    it already.
 
     Raises
     ------
@@ -226,7 +236,7 @@ def load_clip(entry: ClipEntry) -> Clip:
             truth_rows = track_format.read_truth(entry.tracks, spec, skeleton)
         else:
             truth_rows = None
-        hash_hex = content_hash(entry)
+        hash_hex = content_hash or clip_content_hash(entry)
     except InputError as exc:
         exc.clip_id = exc.clip_id or entry.clip_id
         raise

@@ -11,9 +11,9 @@ ground truth's, read and written by :func:`handdb.ingest.long_csv.read_positions
 from handdb.ingest.long_csv import POSITION_COLUMNS as COLUMNS
 from handdb.ingest.long_csv import read_positions as read
 from handdb.ingest.long_csv import write_positions as write
-from handdb.ingest.registry import MARKERS_KIND, InputFormat, register_format
+from handdb.ingest.registry import MARKERS_KIND, InputFormat
 
 __all__ = ["COLUMNS", "FORMAT", "read", "write"]
 
-FORMAT = register_format(InputFormat(name="markers_csv", suffix=".markers.csv",
-                                     kind=MARKERS_KIND, read=read, write=write))
+FORMAT = InputFormat(name="markers_csv", suffix=".markers.csv",
+                                     kind=MARKERS_KIND, read=read, write=write)

@@ -14,7 +14,7 @@ anything else
     Inputs that belong to other readers (``xray``, ``markers``): the inbox scan hands
     them over untouched, grouped by format name.
 
-Other modules add their formats with :func:`register_format` when they are imported.
+The formats are registered in one place, :mod:`handdb.ingest`.
 """
 
 from __future__ import annotations
@@ -23,6 +23,9 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
+
+from handdb.errors import RegistryError
+from handdb.registry import Registry
 
 #: The suffix of a clip's sidecar, ``<clip_id>.clip.json``.
 SIDECAR_SUFFIX = ".clip.json"
@@ -71,39 +74,35 @@ class InputFormat:
     read_truth: Callable[..., Any] | None = None
 
 
-_FORMATS: dict[str, InputFormat] = {}
+#: Every input format by name, filled in :mod:`handdb.ingest`.
+FORMATS: Registry[InputFormat] = Registry("input format")
 
 
 def register_format(fmt: InputFormat) -> InputFormat:
-    """Add ``fmt`` to the registry and return it.
+    """Add ``fmt`` to :data:`FORMATS` and return it.
 
-    Registering the same format twice is harmless; a different format with a name or
-    suffix already taken raises :class:`ValueError`.
+    Raises
+    ------
+    RegistryError
+        If its name or its suffix is taken, or its suffix is the sidecar's.
     """
-    for other in _FORMATS.values():
-        if other == fmt:
-            return fmt
-        if fmt.name == other.name or fmt.suffix == other.suffix:
-            raise ValueError(f"input format '{fmt.name}' ({fmt.suffix}) clashes with "
-                             f"registered format '{other.name}' ({other.suffix})")
     if fmt.suffix == SIDECAR_SUFFIX:
-        raise ValueError(f"'{SIDECAR_SUFFIX}' is the sidecar suffix, not a data format")
-    _FORMATS[fmt.name] = fmt
-    return fmt
+        raise RegistryError(f"'{SIDECAR_SUFFIX}' is the sidecar suffix, not a data format")
+    for other in FORMATS.values():
+        if fmt.suffix == other.suffix:
+            raise RegistryError(f"input format '{fmt.name}' ({fmt.suffix}) clashes with "
+                                f"registered format '{other.name}' ({other.suffix})")
+    return FORMATS.add(fmt.name, fmt)
 
 
 def registered_formats() -> tuple[InputFormat, ...]:
     """Every registered format, longest suffix first (the order names are matched in)."""
-    return tuple(sorted(_FORMATS.values(), key=lambda f: (-len(f.suffix), f.name)))
+    return tuple(sorted(FORMATS.values(), key=lambda f: (-len(f.suffix), f.name)))
 
 
 def get_format(name: str) -> InputFormat:
-    """Return the registered format called ``name``."""
-    try:
-        return _FORMATS[name]
-    except KeyError:
-        raise KeyError(f"no input format '{name}'; registered: "
-                       f"{', '.join(sorted(_FORMATS))}") from None
+    """Return the registered format called ``name`` (:class:`UnknownNameError` if none)."""
+    return FORMATS[name]
 
 
 def match_format(path: Path) -> tuple[InputFormat, str] | None:

@@ -30,7 +30,7 @@ import pyarrow as pa
 
 from handdb.errors import InputError
 from handdb.hand.skeletons import FINGERS
-from handdb.ingest.registry import InputFormat, register_format
+from handdb.ingest.registry import InputFormat
 from handdb.store import tables
 
 #: The file name suffix the inbox recognises.
@@ -248,5 +248,5 @@ def read_xray(path: str | Path) -> tuple[pa.Table, list[InputError]]:
 
 
 #: The inbox format of X-ray measurements; the inbox scan hands these files over by kind.
-FORMAT = register_format(InputFormat(name="xray", suffix=XRAY_SUFFIX, kind="xray",
-                                     read=read_xray))
+FORMAT = InputFormat(name="xray", suffix=XRAY_SUFFIX, kind="xray",
+                                     read=read_xray)

@@ -39,7 +39,6 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Any
 
 import numpy as np
 
@@ -59,7 +58,6 @@ from handdb.lifting.geometry import (
 from handdb.lifting.hand_prior import score_fingers, score_mirrored_fingers
 from handdb.lifting.palm import palm_signs
 from handdb.lifting.pinhole import camera_rays, estimate_root_depth, walk_rays
-from handdb.lifting.registry import register
 from handdb.lifting.result import LiftResult
 from handdb.lifting.temporal import acceleration_spread, sigmoid, sign_posterior, smooth_scale
 
@@ -373,8 +371,3 @@ def lift_kinematic(uv: np.ndarray, skeleton: Skeleton, bone_lengths: np.ndarray,
                       length_inconsistency=inconsistency, scale=scale, method="kinematic",
                       mirror_ambiguous=bool(ambiguous), note=note)
 
-
-@register("kinematic")
-def _kinematic(uv: np.ndarray, skeleton: Skeleton, bone_lengths: np.ndarray, camera: Camera,
-               *, hand: str, **params: Any) -> LiftResult:
-    return lift_kinematic(uv, skeleton, bone_lengths, camera, hand=hand, **params)

@@ -16,7 +16,6 @@ Every joint gets a position, tracked or not: the model fills joints without an i
 from __future__ import annotations
 
 import itertools
-from typing import Any
 
 import numpy as np
 from scipy.optimize import least_squares
@@ -34,7 +33,6 @@ from handdb.hand.model import (
     forward_kinematics,
 )
 from handdb.hand.skeletons import Skeleton, load_skeleton
-from handdb.lifting.registry import register
 from handdb.lifting.result import LiftResult
 from handdb.markers.solve import MARKER_WEIGHT, MAX_EVALUATIONS, SMOOTHNESS_WEIGHT, SOLVER_TOLERANCE
 
@@ -246,8 +244,3 @@ def fit_2d(uv: np.ndarray, skeleton: Skeleton, bone_lengths: np.ndarray, camera:
         note="joints without an image point are placed by the fitted model",
     )
 
-
-@register(METHOD)
-def _model_fit(uv: np.ndarray, skeleton: Skeleton, bone_lengths: np.ndarray, camera: Camera,
-               *, hand: str, **params: Any) -> LiftResult:
-    return fit_2d(uv, skeleton, bone_lengths, camera, hand=hand, **params)

@@ -20,8 +20,6 @@ undo; it costs seconds per clip.
 
 from __future__ import annotations
 
-from typing import Any
-
 import numpy as np
 from scipy.optimize import least_squares
 from scipy.sparse import coo_matrix
@@ -30,7 +28,6 @@ from handdb.clip import Camera
 from handdb.hand.skeletons import Skeleton
 from handdb.lifting.kinematic import lift_kinematic
 from handdb.lifting.pinhole import camera_rays
-from handdb.lifting.registry import register
 from handdb.lifting.result import LiftResult
 
 #: Weight of a joint's acceleration (clip units per frame²) against a bone's length error.
@@ -145,8 +142,3 @@ def lift_refined(uv: np.ndarray, skeleton: Skeleton, bone_lengths: np.ndarray,
                       method="kinematic-refined", mirror_ambiguous=seeded.mirror_ambiguous,
                       note=seeded.note)
 
-
-@register("kinematic-refined")
-def _kinematic_refined(uv: np.ndarray, skeleton: Skeleton, bone_lengths: np.ndarray,
-                       camera: Camera, *, hand: str, **params: Any) -> LiftResult:
-    return lift_refined(uv, skeleton, bone_lengths, camera, hand=hand, **params)

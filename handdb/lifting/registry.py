@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-from collections.abc import Callable
 from typing import Any, Protocol
 
 import numpy as np
@@ -11,6 +10,7 @@ from handdb.clip import HANDS, Camera
 from handdb.errors import BoneLengthError
 from handdb.hand.skeletons import Skeleton
 from handdb.lifting.result import LiftResult
+from handdb.registry import Registry
 
 #: Method used when a clip's sidecar names none.
 DEFAULT_METHOD = "kinematic"
@@ -24,24 +24,13 @@ class LiftMethod(Protocol):
         """Lift ``uv`` to 3D; see :func:`lift`."""
 
 
-_METHODS: dict[str, LiftMethod] = {}
-
-
-def register(name: str) -> Callable[[LiftMethod], LiftMethod]:
-    """Class the decorated function as the lifting method ``name``."""
-
-    def decorate(method: LiftMethod) -> LiftMethod:
-        if name in _METHODS:
-            raise ValueError(f"lifting method '{name}' is registered twice")
-        _METHODS[name] = method
-        return method
-
-    return decorate
+#: Every lifting method by name, filled in :mod:`handdb.lifting`.
+METHODS: Registry[LiftMethod] = Registry("lifting method")
 
 
 def available_methods() -> tuple[str, ...]:
-    """Names of the registered lifting methods."""
-    return tuple(sorted(_METHODS))
+    """Names of the registered lifting methods, sorted."""
+    return tuple(sorted(METHODS))
 
 
 def bone_length_array(skeleton: Skeleton, lengths: dict[str, float]) -> np.ndarray:
@@ -122,15 +111,15 @@ def lift(
 
     Raises
     ------
+    UnknownNameError
+        On an unknown method.
     ValueError
-        On an unknown method or arrays of the wrong shape.
+        On arrays of the wrong shape.
     BoneLengthError
         If a bone of the skeleton has no positive, finite length.
     """
-    if method not in _METHODS:
-        raise ValueError(f"unknown lifting method '{method}'; known: "
-                         f"{', '.join(available_methods())}")
+    run = METHODS[method]
     uv = np.asarray(uv, dtype=np.float64)
     bone_lengths = np.asarray(bone_lengths, dtype=np.float64)
     _check_inputs(uv, skeleton, bone_lengths, hand)
-    return _METHODS[method](uv, skeleton, bone_lengths, camera, hand=hand, **params)
+    return run(uv, skeleton, bone_lengths, camera, hand=hand, **params)

@@ -21,8 +21,6 @@ MCP).
 
 from __future__ import annotations
 
-from typing import Any
-
 import numpy as np
 
 from handdb.clip import Camera
@@ -35,7 +33,6 @@ from handdb.lifting.geometry import (
     orthographic_points,
     projected_lengths,
 )
-from handdb.lifting.registry import register
 from handdb.lifting.result import LiftResult
 
 #: The thesis's positive depth direction in handdb's camera frame (toward the camera).
@@ -133,13 +130,7 @@ def lift_thesis(uv: np.ndarray, skeleton: Skeleton, bone_lengths: np.ndarray,
     )
 
 
-@register("thesis")
-def _thesis(uv: np.ndarray, skeleton: Skeleton, bone_lengths: np.ndarray, camera: Camera,
-            *, hand: str, **params: Any) -> LiftResult:
-    return lift_thesis(uv, skeleton, bone_lengths, camera, hand=hand, check=True, **params)
-
-
-@register("thesis-nocheck")
-def _thesis_nocheck(uv: np.ndarray, skeleton: Skeleton, bone_lengths: np.ndarray,
-                    camera: Camera, *, hand: str, **params: Any) -> LiftResult:
-    return lift_thesis(uv, skeleton, bone_lengths, camera, hand=hand, check=False, **params)
+def lift_thesis_nocheck(uv: np.ndarray, skeleton: Skeleton, bone_lengths: np.ndarray,
+                        camera: Camera, *, hand: str) -> LiftResult:
+    """Lift with the thesis's method without its reflective-ambiguity rule."""
+    return lift_thesis(uv, skeleton, bone_lengths, camera, hand=hand, check=False)

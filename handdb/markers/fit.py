@@ -14,7 +14,7 @@ from dataclasses import dataclass
 import numpy as np
 import pyarrow as pa
 
-from handdb.clip import METERS_PER_UNIT
+from handdb.clip import METERS_PER_UNIT, ClipSpec
 from handdb.export.rotations import JointMotion
 from handdb.hand.model import (
     AXES,
@@ -26,7 +26,9 @@ from handdb.hand.model import (
     local_quaternions,
     rest_offsets,
 )
-from handdb.markers.calibration import Calibration, calibrate
+from handdb.lengths.bone_lengths import BoneLengths
+from handdb.lifting.result import LiftResult
+from handdb.markers.calibration import Calibration, calibrate, calibrated_bone_lengths
 from handdb.markers.solve import (
     SwarmSettings,
     filter_and_refine,
@@ -47,8 +49,8 @@ DEFAULT_SOLVER = "lsq"
 #: 4, ``benchmarks/bench_fitting.py``); a larger step trades accuracy for speed.
 KEY_STEP = 1
 
-#: Name of the method in ``joints_3d.lift_method``.
-METHOD_NAME = "model-fit"
+#: Name of the method in ``joints_3d.lift_method`` and ``clips.lift_method``.
+METHOD_NAME = "marker-fit"
 
 #: Markers a frame needs for a first pose.
 MIN_START_MARKERS = 3
@@ -161,6 +163,39 @@ def fit_markers(markers: np.ndarray, *, hand: str = "right", units: str = "mm",
                      key_frames=keys)
 
 
+def fitted_bone_lengths(fit: MarkerFit, spec: ClipSpec) -> BoneLengths:
+    """The bone lengths of a marker fit, in the clip's units, with their source.
+
+    Calibrated lengths when the fit calibrated the subject; otherwise the sidecar's
+    lengths where it gives them and the model's template for the rest.
+    """
+    if fit.calibration is not None:
+        return calibrated_bone_lengths(fit.calibration, spec.units)
+    skeleton = fit.model.skeleton
+    lengths = np.full(skeleton.n_joints, np.nan)
+    lengths[skeleton.bones[:, 1]] = fit.model.bone_lengths / (METERS_PER_UNIT[spec.units]
+                                                               * 1000.0)
+    given = [j in spec.bone_lengths for j in skeleton.joints]
+    sources = tuple(None if j == skeleton.root else "given" if g else "anthropometric"
+                    for j, g in enumerate(given))
+    details = tuple(None if j == skeleton.root else f"bone_lengths in {spec.path}" if g
+                    else "the hand model's template" for j, g in enumerate(given))
+    return BoneLengths(skeleton=skeleton, units=spec.units, lengths=lengths, sources=sources,
+                       details=details, residuals=np.full(skeleton.n_joints, np.nan),
+                       n_frames=np.zeros(skeleton.n_joints, dtype=np.int64))
+
+
+def fit_positions(fit: MarkerFit) -> LiftResult:
+    """The fitted joints as a :class:`~handdb.lifting.LiftResult` (method ``marker-fit``).
+
+    A fit has no depth signs, scale or length slack of its own: those arrays are NaN.
+    """
+    n_frames, n_joints = fit.joints.shape[:2]
+    unknown = np.full((n_frames, n_joints), np.nan)
+    return LiftResult(xyz=fit.joints, sign_confidence=unknown, length_inconsistency=unknown,
+                      scale=np.full(n_frames, np.nan), method=METHOD_NAME)
+
+
 def joint_motion(fit: MarkerFit, units: str = "mm") -> JointMotion:
     """Return the fit's local joint transforms for the USD and BVH exporters (clip units).
 
@@ -214,38 +249,3 @@ def joint_angles_table(clip_id: str, model: HandModel, poses: np.ndarray) -> pa.
         "angle_deg": angles.ravel(),
     })
 
-
-def joints_3d_table(clip_id: str, fit: MarkerFit, observed: np.ndarray) -> pa.Table:
-    """Table ``joints_3d`` of a marker clip: the fitted joints, no image points.
-
-    Parameters
-    ----------
-    clip_id
-        The clip.
-    fit
-        The fit (joints in clip units).
-    observed
-        ``(T, J) bool``: the joint's marker was present.
-    """
-    n_frames, n_joints = observed.shape
-    xyz = fit.joints.reshape(-1, 3)
-    empty = np.full(n_frames * n_joints, np.nan)
-    return tables.from_columns("joints_3d", {
-        "clip_id": clip_id,
-        "frame": np.repeat(np.arange(n_frames, dtype=np.int32), n_joints),
-        "joint": np.tile(np.array(fit.model.skeleton.joints), n_frames),
-        "joint_index": np.tile(np.arange(n_joints, dtype=np.int32), n_frames),
-        "u": empty,
-        "v": empty,
-        "observed": observed.ravel(),
-        "confidence": empty,
-        "filled": np.zeros(n_frames * n_joints, dtype=bool),
-        "fill_method": pa.nulls(n_frames * n_joints, pa.string()),
-        "x": xyz[:, 0],
-        "y": xyz[:, 1],
-        "z": xyz[:, 2],
-        "lift_method": METHOD_NAME,
-        "scale": empty,
-        "sign_confidence": empty,
-        "length_inconsistency": empty,
-    })

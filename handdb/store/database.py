@@ -18,6 +18,7 @@ it had not committed. A build holds an exclusive lock on the database while it w
 from __future__ import annotations
 
 import contextlib
+import json
 import os
 import socket
 import uuid
@@ -118,6 +119,11 @@ class Store:
         pattern = self.path(table, f"*{PARQUET_SUFFIX}")
         return sorted(self.fs.glob(pattern))
 
+    def partition_keys(self, table: str) -> list[str]:
+        """Keys of the committed partitions of ``table``, sorted."""
+        return [path.rsplit("/", 1)[-1].removesuffix(PARQUET_SUFFIX)
+                for path in self.table_files(table)]
+
     def partition_path(self, table: str, key: str) -> str:
         """Path of the file holding partition ``key`` of ``table``."""
         return self.path(table, f"{key}{PARQUET_SUFFIX}")
@@ -190,6 +196,12 @@ class Store:
         """``clip_id -> build_key`` of every committed clip."""
         committed = self.read_table("clips").select(["clip_id", "build_key"]).to_pydict()
         return dict(zip(committed["clip_id"], committed["build_key"], strict=True))
+
+    def clip_stage_keys(self) -> dict[str, dict[str, str]]:
+        """``clip_id -> {stage: key}`` of every committed clip."""
+        committed = self.read_table("clips").select(["clip_id", "stage_keys"]).to_pydict()
+        return {clip_id: json.loads(keys) for clip_id, keys in
+                zip(committed["clip_id"], committed["stage_keys"], strict=True)}
 
     def remove_temporaries(self) -> int:
         """Delete files left half-written by an interrupted build; return how many."""

@@ -10,6 +10,7 @@ from pathlib import Path
 import pyarrow as pa
 
 from handdb.errors import HanddbError, InputError
+from handdb.ingest.inbox import inbox_relative
 from handdb.store import tables
 
 _KEY_COLUMNS = ("file", "line", "field", "reason", "content_hash")
@@ -43,13 +44,6 @@ class Refusal:
         return f"{where}:{what} {self.reason}"
 
 
-def _relative(file: str, inbox: Path) -> str:
-    try:
-        return Path(file).resolve().relative_to(inbox.resolve()).as_posix()
-    except ValueError:
-        return file
-
-
 def _content_hash(file: str) -> str | None:
     path = Path(file)
     if not path.is_file():
@@ -71,7 +65,7 @@ def quarantine_table(
     rows = []
     for refusal in refusals:
         row = {
-            "file": _relative(refusal.file, inbox),
+            "file": inbox_relative(refusal.file, inbox),
             "line": refusal.line,
             "field": refusal.field,
             "reason": refusal.reason,

@@ -39,7 +39,7 @@ def test_inbox_clips_load_and_repeat_the_pool(bench, tmp_path, monkeypatch):
     assert bench.write_inbox(inbox, 3, 60) == 180
     entries = discover(inbox).clips
     assert [e.clip_id for e in entries] == ["c0000", "c0001", "c0002"]
-    clips = [pipeline.ingest(e, "key").clip for e in entries]
+    clips = [pipeline.ingest(e) for e in entries]
     assert all(c.n_frames == 60 and c.truth is not None for c in clips)
     assert not clips[0].observed.all()
     np.testing.assert_array_equal(clips[2].uv, clips[0].uv)

@@ -3,7 +3,7 @@ import json
 import pyarrow.parquet as pq
 from typer.testing import CliRunner
 
-from handdb.cli.gapfill import app
+from handdb.cli import app
 from handdb.hand.skeletons import load_skeleton
 from handdb.ingest import tracks_csv, truth_csv
 from handdb.store.database import Store

@@ -6,9 +6,9 @@ from handdb.hand.model import forward_kinematics
 from handdb.markers.fit import (
     ROOT_AXES,
     fit_markers,
+    fit_positions,
     joint_angles_table,
     joint_motion,
-    joints_3d_table,
     key_frames,
 )
 from handdb.store.tables import schema
@@ -69,13 +69,11 @@ def test_joint_angles_rows_name_joint_and_axis(fit):
     assert flexion == pytest.approx(np.degrees(fit.poses[0, index]))
 
 
-def test_joints_3d_rows_carry_the_fit(capture, fit):
-    observed = np.isfinite(capture[1]).all(axis=-1)
-    table = joints_3d_table("m01", fit, observed)
-    assert table.schema.equals(schema("joints_3d"))
-    assert table.num_rows == observed.size
-    np.testing.assert_allclose(np.array(table.column("z")), fit.joints[..., 2].ravel())
-    assert set(table.column("lift_method").to_pylist()) == {"model-fit"}
+def test_fit_positions_are_the_fitted_joints(fit):
+    positions = fit_positions(fit)
+    assert positions.method == "marker-fit"
+    np.testing.assert_array_equal(positions.xyz, fit.joints)
+    assert np.isnan(positions.sign_confidence).all() and np.isnan(positions.scale).all()
 
 
 @pytest.mark.slow

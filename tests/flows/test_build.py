@@ -3,11 +3,11 @@
 import hashlib
 
 import pytest
-
-from handdb_flows.build import run
 from handdb_flows.settings import quick_flows
+
 from handdb.store.database import Store
 from handdb.store.query import query
+from tests.building import run
 
 
 def build(inbox, db):

@@ -25,11 +25,11 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-
-from handdb_flows.build import run
 from handdb_flows.settings import quick_flows
+
 from handdb.store.database import LOCK_FILE
 from handdb.store.query import query
+from tests.building import run
 
 pytestmark = pytest.mark.slow
 

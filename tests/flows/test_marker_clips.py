@@ -4,14 +4,14 @@ import json
 
 import numpy as np
 import pytest
-
-from handdb_flows.build import run
 from handdb_flows.settings import quick_flows
+
 from handdb.export.rotations import CAMERA_TO_Y_UP
 from handdb.hand.skeletons import load_skeleton
 from handdb.ingest import get_format
 from handdb.store.query import query
 from handdb.synthetic import synthesize_clip
+from tests.building import run
 from tests.export.usd_reading import joint_world_positions, open_skeleton
 
 N_FRAMES = 12

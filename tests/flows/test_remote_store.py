@@ -12,12 +12,12 @@ from pathlib import Path
 
 import fsspec
 import pytest
+from handdb_flows.settings import quick_flows
 
 import handdb
-from handdb_flows.build import run
-from handdb_flows.settings import quick_flows
 from handdb.errors import DatabaseLockedError
 from handdb.store.database import LOCK_FILE, Store
+from tests.building import run
 
 
 def build(inbox: Path, db: str):

@@ -2,9 +2,8 @@
 
 import urllib.request
 
-from prefect.settings import PREFECT_API_URL, temporary_settings
-
 from handdb_flows.settings import shared_api
+from prefect.settings import PREFECT_API_URL, temporary_settings
 
 
 def test_shared_api_publishes_this_process_server_and_restores_the_settings():

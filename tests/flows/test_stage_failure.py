@@ -1,8 +1,10 @@
 """A stage that fails on one clip fails that clip only: the build finishes and says why."""
 
-from handdb_flows.build import run, summary_markdown
 from handdb_flows.settings import quick_flows
+
+from handdb.build import summary_markdown
 from handdb.store.query import query
+from tests.building import run
 
 
 def test_a_failed_export_fails_its_clip_and_the_others_are_committed(inbox, tmp_path):

@@ -41,18 +41,18 @@ DEMO_DB_CLIPS = ("rapid-s01", "wave-s02")
 
 @pytest.fixture(scope="session")
 def demo_db(tmp_path_factory):
-    """A database holding two demo clips, built by the pipeline's own stages (no flow)."""
-    from handdb.build import stages as pipeline
+    """A database holding two demo clips, built in this process (no orchestrator)."""
+    from handdb.build import BuildOptions, build_in_process
     from handdb.demo import write_demo_inbox
-    from handdb.ingest import discover
-    from handdb.store.database import Store
 
     root = tmp_path_factory.mktemp("gapfill-db")
-    inbox = root / "inbox"
-    write_demo_inbox(inbox)
-    store = Store(str(root / "db"))
-    for entry in discover(inbox).clips:
-        if entry.clip_id in DEMO_DB_CLIPS:
-            result = pipeline.fill(pipeline.ingest(entry, "test"), pipeline.BuildOptions())
-            store.commit_clip(entry.clip_id, pipeline.clip_tables(result, inbox))
-    return store.url
+    demo, inbox = root / "demo", root / "inbox"
+    write_demo_inbox(demo)
+    inbox.mkdir()
+    for clip_id in DEMO_DB_CLIPS:
+        for path in demo.glob(f"{clip_id}.*"):
+            path.rename(inbox / path.name)
+    db = str(root / "db")
+    summary = build_in_process(inbox, db, BuildOptions(export_usd=False))
+    assert sorted(summary.processed) == sorted(DEMO_DB_CLIPS)
+    return db

@@ -1,10 +1,10 @@
+from handdb_flows.gapfill_eval import gapfill_eval
+from handdb_flows.settings import quick_flows
 from typer.testing import CliRunner
 
-from handdb_flows.gapfill_eval import gapfill_eval, summary_markdown
-from handdb_flows.settings import quick_flows
-from handdb.cli.gapfill import app
+from handdb.cli import app
 from handdb.gapfill.evaluate import RANDOM_MASK, THESIS_MASK, pooled_rmse
-from handdb.gapfill.sources import DatabaseSource, SyntheticSource
+from handdb.gapfill.sources import DatabaseSource, SyntheticSource, summary_markdown
 from handdb.store.database import Store
 
 

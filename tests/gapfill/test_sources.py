@@ -36,7 +36,7 @@ def test_a_database_clip_loads_as_its_inbox_files_read(demo_db, tmp_path):
     clip = DatabaseSource(demo_db, "rapid-s01").load()
     assert clip.skeleton.name == expected.skeleton.name
     np.testing.assert_allclose(clip.uv, expected.uv, rtol=0, atol=1e-9)
-    np.testing.assert_allclose(clip.xyz, expected.truth, rtol=0, atol=1e-9)
+    np.testing.assert_allclose(clip.truth, expected.truth, rtol=0, atol=1e-9)
 
 
 def test_evaluation_lands_in_the_database_partition_and_report(tmp_path):

@@ -3,10 +3,10 @@
 from pathlib import Path
 
 import pytest
-
-from handdb_flows.build import run
 from handdb_flows.settings import quick_flows
+
 from handdb.demo import write_demo_inbox
+from tests.building import run
 
 
 @pytest.fixture(scope="session")
@@ -15,6 +15,6 @@ def demo_db(tmp_path_factory) -> Path:
     root = tmp_path_factory.mktemp("demo")
     write_demo_inbox(root / "inbox")
     with quick_flows():
-        summary = run(str(root / "inbox"), str(root / "db"), workers=2)
+        summary = run(str(root / "inbox"), str(root / "db"), workers=2, runner="local")
     assert summary.ok and not summary.refusals, summary
     return root / "db"

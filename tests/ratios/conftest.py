@@ -8,9 +8,10 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-from handdb.clip import Clip, parse_sidecar
+from handdb.clip import Clip
 from handdb.hand.anthropometry import hand_length_proportions
 from handdb.hand.skeletons import Skeleton, load_skeleton
+from handdb.ingest.sidecar import parse_sidecar
 
 #: Hand length of the synthetic subject, mm.
 HAND_LENGTH_MM = 185.0

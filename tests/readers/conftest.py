@@ -8,8 +8,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from handdb.clip import ClipSpec, parse_sidecar
+from handdb.clip import ClipSpec
 from handdb.hand.skeletons import Skeleton, load_skeleton
+from handdb.ingest.sidecar import parse_sidecar
 
 SIDECAR = {"skeleton": "mediapipe21", "hand": "right", "fps": 30, "subject": "s01",
            "units": "mm", "camera": {"model": "orthographic"}}

@@ -4,10 +4,10 @@ import numpy as np
 import pyarrow as pa
 import pytest
 
-from handdb.errors import InputError
+from handdb.errors import InputError, RegistryError
 from handdb.ingest import (
     InputFormat,
-    content_hash,
+    clip_content_hash,
     discover,
     load_clip,
     maya,
@@ -88,7 +88,7 @@ def test_other_readers_formats_are_handed_over(inbox):
 
 
 def test_registering_a_clashing_suffix_is_refused():
-    with pytest.raises(ValueError, match="clashes"):
+    with pytest.raises(RegistryError, match="clashes"):
         register_format(InputFormat(name="other_csv", suffix=".tracks.csv", kind="tracks",
                                     read=print))
 
@@ -139,24 +139,24 @@ def test_maya_clip_has_track_and_truth_from_one_file(tmp_path, write_sidecar, th
 
 def test_content_hash_follows_bytes_and_names(inbox):
     entry = discover(inbox).clips[0]
-    first = content_hash(entry)
-    assert content_hash(discover(inbox).clips[0]) == first == load_clip(entry).content_hash
+    first = clip_content_hash(entry)
+    assert clip_content_hash(discover(inbox).clips[0]) == first == load_clip(entry).content_hash
     sidecar = json.loads(entry.sidecar.read_text())
     entry.sidecar.write_text(json.dumps(sidecar | {"fps": 60}))
-    assert content_hash(entry) != first
+    assert clip_content_hash(entry) != first
     entry.sidecar.write_text(json.dumps(sidecar))
-    assert content_hash(entry) == first
+    assert clip_content_hash(entry) == first
     for path in entry.paths:
         path.rename(path.with_name(path.name.replace("s01_grasp", "s01_grip")))
-    assert content_hash(discover(inbox).clips[0]) != first
+    assert clip_content_hash(discover(inbox).clips[0]) != first
 
 
 def test_openpose_hash_covers_every_frame_file(inbox):
     entry = discover(inbox).clips[1]
-    first = content_hash(entry)
+    first = clip_content_hash(entry)
     frame_file = sorted(entry.tracks.iterdir())[5]
     frame_file.write_text(frame_file.read_text().replace("1.3", "1.2", 1))
-    assert content_hash(entry) != first
+    assert clip_content_hash(entry) != first
 
 
 @pytest.mark.parametrize(("sidecar", "field", "message"), [

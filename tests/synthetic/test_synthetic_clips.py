@@ -5,8 +5,8 @@ import json
 import numpy as np
 import pytest
 
-from handdb.clip import parse_sidecar
 from handdb.hand.skeletons import load_skeleton
+from handdb.ingest.sidecar import parse_sidecar
 from handdb.store import tables
 from handdb.synthetic import MOTIONS, synthesize_clip, thesis_clench_clip
 

@@ -1,0 +1,170 @@
+"""What a build has to do, decided from the inbox and the database alone.
+
+:func:`plan_build` scans the inbox, reads its X-ray tables (the joint ratios every clip's
+bone lengths depend on), hashes each clip's files once and compares every stage key with
+the one the clip was committed under. It writes nothing: a build whose plan has nothing to
+do finishes without running a single stage, and without starting Prefect.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import pyarrow as pa
+
+from handdb.build.keys import first_changed_stage, stage_keys, table_hash
+from handdb.build.options import BuildOptions
+from handdb.ingest import clip_content_hash, discover
+from handdb.ingest.inbox import ClipEntry
+from handdb.ingest.registry import MARKERS_KIND, get_format
+from handdb.ingest.xray import XRAY_SUFFIX, read_xray
+from handdb.lengths.ratios import joint_ratios
+from handdb.store import tables
+from handdb.store.database import Store
+from handdb.store.quarantine import Refusal, quarantine_table
+
+
+@dataclass(frozen=True)
+class PlannedClip:
+    """One clip of the inbox and what it needs.
+
+    Attributes
+    ----------
+    entry
+        The clip's inbox entries.
+    content_hash
+        SHA-256 over its files.
+    keys
+        The key of each stage.
+    start
+        The first stage to run; ``None`` when the committed clip is current.
+    markers
+        Whether the clip's data is 3D markers.
+    """
+
+    entry: ClipEntry
+    content_hash: str
+    keys: dict[str, str]
+    start: str | None
+    markers: bool
+
+    @property
+    def clip_id(self) -> str:
+        """The clip's id."""
+        return self.entry.clip_id
+
+
+@dataclass(frozen=True)
+class XrayInputs:
+    """The inbox's X-ray tables and the joint ratios they give.
+
+    Attributes
+    ----------
+    measurements
+        ``partition key -> rows`` of ``xray_measurements`` to write (files that changed).
+    ratios
+        Table ``joint_ratios`` from every measurement, stored and new.
+    ratios_changed
+        Whether ``ratios`` differs from the stored table.
+    refusals
+        Refused rows and files. A file refused whole keeps the rows stored for it.
+    """
+
+    measurements: dict[str, pa.Table]
+    ratios: pa.Table
+    ratios_changed: bool
+    refusals: tuple[Refusal, ...]
+
+
+@dataclass(frozen=True)
+class BuildPlan:
+    """Everything a build will do, before it does any of it."""
+
+    inbox: str
+    db: str
+    options: BuildOptions
+    clips: tuple[PlannedClip, ...]
+    xray: XrayInputs
+    refusals: tuple[Refusal, ...] = field(default=())
+
+    @property
+    def todo(self) -> tuple[PlannedClip, ...]:
+        """Clips with a stage to run."""
+        return tuple(c for c in self.clips if c.start is not None)
+
+    @property
+    def unchanged(self) -> tuple[PlannedClip, ...]:
+        """Clips committed under their current keys."""
+        return tuple(c for c in self.clips if c.start is None)
+
+    def quarantine(self, store: Store, clip_refusals: list[Refusal]) -> pa.Table | None:
+        """The ``quarantine`` table after the build, or ``None`` when it does not change."""
+        previous = store.read_table("quarantine")
+        refused = quarantine_table([*self.refusals, *self.xray.refusals, *clip_refusals],
+                                   self.inbox, previous)
+        return None if refused.equals(previous) else refused
+
+    @property
+    def nothing_to_do(self) -> bool:
+        """No clip to process and no X-ray table to store: only a run record to write.
+
+        The quarantine may still change (a refused file edited but still refused); that is
+        written without processing anything either.
+        """
+        return not self.todo and not self.xray.measurements and not self.xray.ratios_changed
+
+
+def read_xray_inputs(paths: list[Path], store: Store) -> XrayInputs:
+    """Read the inbox's X-ray tables; work out the joint ratios they give with the stored ones.
+
+    Each file's measurements stand for that file's partition of ``xray_measurements``. A
+    file refused whole (not a table of measurements at all) leaves its stored partition as
+    it was.
+    """
+    partitions = {key: store.read("xray_measurements", key)
+                  for key in store.partition_keys("xray_measurements")}
+    refusals: list[Refusal] = []
+    changed: dict[str, pa.Table] = {}
+    for path in sorted(paths):
+        measurements, errors = read_xray(path)
+        refusals += [Refusal.from_error(error) for error in errors]
+        if errors and measurements.num_rows == 0:
+            continue
+        key = path.name.removesuffix(XRAY_SUFFIX)
+        measurements = tables.conform("xray_measurements", measurements)
+        if partitions.get(key) != measurements:
+            changed[key] = measurements
+        partitions[key] = measurements
+    present = [partitions[key] for key in sorted(partitions) if partitions[key] is not None]
+    every = pa.concat_tables(present) if present else tables.empty("xray_measurements")
+    ratios = tables.conform("joint_ratios", joint_ratios(every))
+    previous = store.read("joint_ratios", "joint_ratios")
+    return XrayInputs(measurements=changed, ratios=ratios,
+                      ratios_changed=previous is None or not previous.equals(ratios),
+                      refusals=tuple(refusals))
+
+
+def plan_build(inbox: str | Path, db: str, options: BuildOptions) -> BuildPlan:
+    """Decide what a build of ``inbox`` into ``db`` has to do; write nothing.
+
+    Raises
+    ------
+    InputError
+        If ``inbox`` is not a folder.
+    """
+    store = Store(db)
+    scan = discover(Path(inbox))
+    xray = read_xray_inputs(list(scan.others.get("xray", ())), store)
+    ratios_hash = table_hash(xray.ratios)
+    stored = store.clip_stage_keys()
+    clips = []
+    for entry in scan.clips:
+        digest = clip_content_hash(entry)
+        markers = get_format(entry.track_format).kind == MARKERS_KIND
+        keys = stage_keys(digest, options, ratios_hash, marker_clip=markers)
+        clips.append(PlannedClip(entry=entry, content_hash=digest, keys=keys,
+                                 start=first_changed_stage(keys, stored.get(entry.clip_id)),
+                                 markers=markers))
+    return BuildPlan(inbox=str(inbox), db=db, options=options, clips=tuple(clips), xray=xray,
+                     refusals=tuple(Refusal.from_error(e) for e in scan.refused))

@@ -1,0 +1,126 @@
+"""One clip through every stage it needs, then committed: :func:`process_clip`."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+
+import pyarrow as pa
+
+from handdb.build import progress
+from handdb.build.keys import MARKER_FIT_STAGES, STAGES
+from handdb.build.options import BuildOptions
+from handdb.build.plan import PlannedClip
+from handdb.build.reload import resume
+from handdb.build.rows import clip_tables
+from handdb.build.stages import (
+    ClipRefused,
+    ClipResult,
+    export,
+    fill,
+    fit_marker_clip,
+    ingest,
+    lift_clip,
+    resolve_bone_lengths,
+    validate,
+)
+from handdb.errors import HanddbError, InputError
+from handdb.store.database import Store
+from handdb.store.quarantine import Refusal
+
+
+@dataclass(frozen=True)
+class BuildContext:
+    """What every clip of a build shares: where it reads and writes, and how it computes."""
+
+    inbox: str
+    db: str
+    options: BuildOptions
+    ratios: pa.Table
+
+    @property
+    def store(self) -> Store:
+        """The database."""
+        return Store(self.db)
+
+
+class StageFailed(HanddbError):
+    """A stage raised an error that is not about the clip's input (a bug, a full disk).
+
+    The original error is the ``__cause__``; ``stage`` names where it happened.
+    """
+
+    def __init__(self, clip_id: str, stage: str, error: BaseException) -> None:
+        self.clip_id = clip_id
+        self.stage = stage
+        super().__init__(f"{stage}: {type(error).__name__}: {error}")
+
+
+def _refusal(refused: ClipRefused, result_clip_id: str, sidecar: str) -> Refusal:
+    error = refused.error
+    if isinstance(error, InputError):
+        return Refusal.from_error(error, clip_id=result_clip_id)
+    return Refusal(file=sidecar, reason=str(error), error_type=type(error).__name__,
+                   field=refused.field, clip_id=result_clip_id)
+
+
+def _stage_runners(context: BuildContext, markers: bool
+                   ) -> dict[str, Callable[[ClipResult], ClipResult]]:
+    options = context.options
+    runners: dict[str, Callable[[ClipResult], ClipResult]] = {
+        "lengths": lambda r: resolve_bone_lengths(r, context.ratios),
+        "gap_fill": lambda r: fill(r, options),
+        "lift": lambda r: lift_clip(r, options),
+        "validate": lambda r: validate(r, options),
+        "export": lambda r: export(r, context.store, options),
+    }
+    if markers:
+        runners.update(dict.fromkeys(MARKER_FIT_STAGES, lambda r: r))
+        runners["lengths"] = fit_marker_clip
+    return runners
+
+
+def process_clip(item: PlannedClip, context: BuildContext) -> ClipResult | Refusal:
+    """Run the stages ``item`` needs, from its first changed one, and commit the clip.
+
+    Stages before ``item.start`` are read back from the store. A marker clip's bone
+    lengths, gap filling and lifting are one model fit, redone whenever any of them or
+    anything after them is.
+
+    Returns
+    -------
+    ClipResult or Refusal
+        The committed result, or why the clip's input was refused (nothing is committed
+        then, and the clip's stored rows stay as they were).
+
+    Raises
+    ------
+    StageFailed
+        When a stage fails for a reason other than the clip's input.
+    """
+    clip_id = item.entry.clip_id
+    start = item.start or STAGES[0]
+    if item.markers and STAGES.index(start) > STAGES.index(MARKER_FIT_STAGES[0]):
+        start = MARKER_FIT_STAGES[0]
+    stage = start
+    try:
+        progress.advance(clip_id, stage)
+        if start == STAGES[0]:
+            result = ClipResult(clip=ingest(item.entry, item.content_hash), keys=item.keys)
+        else:
+            result = resume(context.store, item.entry, item.content_hash, item.keys, start)
+        runners = _stage_runners(context, item.markers)
+        for stage in STAGES[STAGES.index(start):]:
+            if stage == STAGES[0]:
+                continue
+            progress.advance(clip_id, stage)
+            result = runners[stage](result)
+        stage = "commit"
+        progress.advance(clip_id, stage)
+        context.store.commit_clip(clip_id, clip_tables(result, Path(context.inbox)))
+    except ClipRefused as refused:
+        return _refusal(refused, clip_id, str(item.entry.sidecar))
+    except Exception as error:  # noqa: BLE001 - reported with the stage, the cause kept
+        raise StageFailed(clip_id, stage, error) from error
+    return result

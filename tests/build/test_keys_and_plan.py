@@ -1,0 +1,90 @@
+"""The build's plan: stage keys decide which clips, and which of their stages, run again."""
+
+import hashlib
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from handdb import gapfill, lifting
+from handdb.build import BuildOptions, build_in_process, plan_build
+from handdb.build.keys import STAGES, stage_keys
+
+
+def digests(db: Path) -> dict[str, str]:
+    return {p.relative_to(db).as_posix(): hashlib.sha256(p.read_bytes()).hexdigest()
+            for p in sorted(db.rglob("*")) if p.is_file() and p.parent.name != "runs"
+            and p.name != ".lock"}
+
+
+@pytest.fixture
+def built(inbox, tmp_path):
+    db = str(tmp_path / "db")
+    summary = build_in_process(inbox, db, BuildOptions(export_usd=False))
+    assert sorted(summary.processed) == ["alpha", "bravo", "charlie"]
+    return inbox, db
+
+
+def test_keys_chain_through_the_stages():
+    base = stage_keys("h", BuildOptions(), "r", marker_clip=False)
+    assert list(base) == list(STAGES)
+    other_fill = stage_keys("h", BuildOptions(gap_fill="linear"), "r", marker_clip=False)
+    changed = [s for s in STAGES if base[s] != other_fill[s]]
+    assert changed == ["gap_fill", "lift", "validate", "export"]
+    other_ratios = stage_keys("h", BuildOptions(), "r2", marker_clip=False)
+    assert [s for s in STAGES if base[s] != other_ratios[s]] == [
+        "lengths", "lift", "validate", "export"]
+    marker = stage_keys("h", BuildOptions(), "r", marker_clip=True)
+    assert marker["lengths"] == marker["gap_fill"] == marker["lift"]
+
+
+def test_a_built_database_has_nothing_to_do(built):
+    inbox, db = built
+    plan = plan_build(inbox, db, BuildOptions(export_usd=False))
+    assert plan.nothing_to_do and len(plan.unchanged) == 3
+
+
+def test_a_new_gap_filling_version_redoes_gap_filling_and_what_follows(built, monkeypatch):
+    inbox, db = built
+    before = digests(Path(db))
+    monkeypatch.setattr(gapfill, "VERSION", gapfill.VERSION + 1)
+    plan = plan_build(inbox, db, BuildOptions(export_usd=False))
+    assert {c.clip_id: c.start for c in plan.clips} == dict.fromkeys(
+        ["alpha", "bravo", "charlie"], "gap_fill")
+    summary = build_in_process(inbox, db, BuildOptions(export_usd=False), plan=plan)
+    assert sorted(summary.processed) == ["alpha", "bravo", "charlie"]
+    after = digests(Path(db))
+    # the algorithm did not change: every table is what it was, only the keys moved
+    assert {k: v for k, v in after.items() if not k.startswith("clips/")} == \
+        {k: v for k, v in before.items() if not k.startswith("clips/")}
+    assert plan_build(inbox, db, BuildOptions(export_usd=False)).nothing_to_do
+
+
+def test_a_resumed_lift_reads_the_earlier_stages_back(built, monkeypatch):
+    inbox, db = built
+    monkeypatch.setattr(lifting, "VERSION", lifting.VERSION + 1)
+    plan = plan_build(inbox, db, BuildOptions(export_usd=False))
+    assert {c.start for c in plan.clips} == {"lift"}
+    for track in Path(inbox).glob("*.tracks.csv"):
+        track.write_text("not read again\n")  # the hash in the plan still matches
+    summary = build_in_process(inbox, db, BuildOptions(export_usd=False), plan=plan)
+    assert sorted(summary.processed) == ["alpha", "bravo", "charlie"] and not summary.refusals
+
+
+def test_an_edited_file_redoes_its_clip_from_ingest(built):
+    inbox, db = built
+    sidecar = Path(inbox) / "bravo.clip.json"
+    sidecar.write_text(sidecar.read_text().replace('"fps": 30.0', '"fps": 25.0'))
+    plan = plan_build(inbox, db, BuildOptions(export_usd=False))
+    assert {c.clip_id: c.start for c in plan.todo} == {"bravo": "ingest"}
+
+
+def test_nothing_to_do_never_starts_prefect(built):
+    inbox, db = built
+    code = ("import sys; from handdb.build import BuildOptions, run_build; "
+            "s = run_build(sys.argv[1], sys.argv[2], BuildOptions(export_usd=False), "
+            "runner='thread'); print(len(s.unchanged), 'prefect' in sys.modules)")
+    out = subprocess.run([sys.executable, "-c", code, str(inbox), db], capture_output=True,
+                         text=True, check=True).stdout
+    assert out.split() == ["3", "False"]
