@@ -1,3 +1,4 @@
+import json
 import multiprocessing
 
 import pyarrow.parquet as pq
@@ -21,7 +22,7 @@ def truth_rows(clip_id, n_frames, offset=0.0):
 def clip_row(clip_id, key="k1"):
     return tables.from_columns("clips", {
         "clip_id": [clip_id], "content_hash": ["h"], "build_key": [key],
-        "stage_keys": ['{"ingest": "%s"}' % key],
+        "stage_keys": [json.dumps({"ingest": key})],
         "source_format": ["tracks_csv"], "source_files": [[f"{clip_id}.clip.json"]],
         "skeleton": ["mediapipe21"], "hand": ["right"], "fps": [30.0], "subject": ["s01"],
         "units": ["mm"], "camera_model": ["orthographic"], "fx": [None], "fy": [None],
