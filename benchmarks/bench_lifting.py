@@ -19,8 +19,8 @@ from concurrent.futures import ThreadPoolExecutor
 import numpy as np
 
 from handdb.clip import Camera
-from handdb.hand.skeletons import load_skeleton
-from handdb.lifting import available_methods, bone_length_array, lift
+from handdb.hand.skeletons import bone_length_array, load_skeleton
+from handdb.lifting import available_methods, lift
 from handdb.synthetic.clips import synthesize_clip
 
 LENGTHS = (400, 10_000, 100_000)

@@ -22,8 +22,8 @@ from pathlib import Path
 import numpy as np
 
 from handdb.clip import Camera
-from handdb.hand.skeletons import load_skeleton
-from handdb.lifting import available_methods, bone_length_array, lift
+from handdb.hand.skeletons import bone_length_array, load_skeleton
+from handdb.lifting import available_methods, lift
 from handdb.synthetic.clips import synthesize_clip, thesis_clench_clip
 from handdb.validation.depth import clip_summary, joint_errors, validation_table
 

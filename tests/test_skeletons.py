@@ -99,3 +99,10 @@ def test_convert_checks_the_joint_axis():
     mp, th = load_skeleton("mediapipe21"), load_skeleton("dhg22")
     with pytest.raises(ValueError, match="22 joints"):
         convert_points(np.zeros((2, 22, 3)), mp, th)
+
+
+def test_a_shared_preset_cannot_be_edited():
+    skeleton = load_skeleton("mediapipe21")
+    with pytest.raises(ValueError, match="read-only"):
+        skeleton.parents[1] = 5
+    assert load_skeleton("mediapipe21").parents[1] == 0

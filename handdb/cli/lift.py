@@ -19,9 +19,9 @@ from rich.table import Table
 
 from handdb.clip import Camera
 from handdb.errors import InputError
-from handdb.hand.skeletons import Skeleton, load_skeleton
+from handdb.hand.skeletons import Skeleton, bone_length_array, load_skeleton
 from handdb.ingest.inbox import discover, load_clip
-from handdb.lifting import available_methods, bone_length_array, lift
+from handdb.lifting import available_methods, lift
 from handdb.synthetic.clips import synthesize_clip, thesis_clench_clip
 from handdb.validation.depth import clip_summary, comparison_chart, validation_table
 

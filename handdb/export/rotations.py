@@ -47,7 +47,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from handdb.errors import BoneLengthError, SkeletonError
+from handdb.errors import SkeletonError
 from handdb.hand.skeletons import FINGERS, Skeleton
 
 #: Below this bend (angle between consecutive finger bones), the flexion plane of a finger
@@ -100,38 +100,6 @@ class JointMotion:
     def root_translation(self, skeleton: Skeleton) -> np.ndarray:
         """World position of the root joint, ``(T, 3)``, clip units."""
         return self.translations[:, skeleton.root]
-
-
-def bone_length_array(skeleton: Skeleton, bone_lengths: dict[str, float]) -> np.ndarray:
-    """Bone lengths as an array indexed by the bone's child joint.
-
-    Parameters
-    ----------
-    skeleton
-        The skeleton.
-    bone_lengths
-        Child joint name -> bone length, clip units. Every bone of ``skeleton`` is needed.
-
-    Returns
-    -------
-    numpy.ndarray
-        ``(J,) float64``, clip units; the root's entry (no bone ends there) is ``0``.
-
-    Raises
-    ------
-    BoneLengthError
-        If a bone has no length or a length that is not positive and finite.
-    """
-    lengths = np.zeros(skeleton.n_joints)
-    for bone in skeleton.bone_names:
-        length = bone_lengths.get(bone)
-        if length is None or not np.isfinite(length) or length <= 0:
-            raise BoneLengthError(
-                f"skeleton '{skeleton.name}': bone '{bone}' needs a positive length, "
-                f"got {length!r}"
-            )
-        lengths[skeleton.index(bone)] = length
-    return lengths
 
 
 def child_counts(skeleton: Skeleton) -> np.ndarray:
@@ -272,7 +240,7 @@ def joint_rotations(
         Skeleton of ``xyz``.
     bone_lengths
         ``(J,) float64`` length of the bone ending at each joint, clip units (see
-        :func:`bone_length_array`).
+        :func:`~handdb.hand.skeletons.bone_length_array`).
     keep_lengths
         ``True``: every bone has its length from ``bone_lengths``. ``False``: every bone
         has its length measured in ``xyz`` at each frame.

@@ -14,9 +14,8 @@ import numpy as np
 
 from handdb.errors import StoreError
 from handdb.export.bvh import export_clip_bvh
-from handdb.export.rotations import bone_length_array
 from handdb.export.usd import LAYER_SUFFIXES, USDZ_SUFFIX, export_clip_usd
-from handdb.hand.skeletons import Skeleton, load_skeleton
+from handdb.hand.skeletons import Skeleton, bone_length_array, load_skeleton
 from handdb.store.database import Store
 
 BVH_SUFFIX = ".bvh"
@@ -77,7 +76,8 @@ def read_stored_motion(db: str, clip_id: str) -> StoredMotion:
     xyz = np.full((clip["n_frames"], skeleton.n_joints, 3), np.nan)
     positions = np.column_stack([joints[axis] for axis in "xyz"]).astype(np.float64)
     xyz[joints["frame"], joints["joint_index"]] = positions
-    lengths = bone_length_array(skeleton, dict(zip(bones["bone"], bones["length"], strict=True)))
+    lengths = bone_length_array(skeleton, dict(zip(bones["bone"], bones["length"], strict=True)),
+                                complete=True)
     return StoredMotion(clip_id=clip_id, skeleton=skeleton, hand=clip["hand"],
                         units=clip["units"], fps=clip["fps"], xyz=xyz, bone_lengths=lengths)
 

@@ -17,16 +17,13 @@ from pathlib import Path
 
 import numpy as np
 
-from handdb.errors import SkeletonError
+from handdb.errors import BoneLengthError, SkeletonError
 from handdb.paths import SCHEMAS_DIR
 
 SKELETONS_DIR = SCHEMAS_DIR / "skeletons"
 
 #: Fingers from the thumb side to the little-finger side.
 FINGERS: tuple[str, ...] = ("thumb", "index", "middle", "ring", "little")
-
-#: The joints of a finger a hinge can bend, in order from base to tip, by role.
-HINGE_ROLES = frozenset({"pip", "dip", "ip"})
 
 
 @dataclass(frozen=True)
@@ -40,7 +37,7 @@ class Skeleton:
     joints
         Canonical joint names, ``(J,)``.
     parents
-        Index of each joint's parent, ``(J,) int64``; ``-1`` for the root.
+        Index of each joint's parent, ``(J,) int64``, read-only; ``-1`` for the root.
     fingers
         Finger of each joint, ``(J,)``.
     roles
@@ -151,6 +148,7 @@ def _parse(doc: dict, source: Path) -> Skeleton:
         if f not in (*FINGERS, "palm"):
             raise SkeletonError(f"{source}: unknown finger '{f}'")
     ref = doc.get("reference_lengths") or {}
+    parents.flags.writeable = False  # presets are cached and shared: nobody may edit them
     return Skeleton(
         name=doc["name"],
         joints=tuple(names),
@@ -209,3 +207,45 @@ def frame_bone_lengths(positions: np.ndarray, skeleton: Skeleton) -> np.ndarray:
     parent, child = skeleton.bones.T
     lengths[:, child] = np.linalg.norm(positions[:, child] - positions[:, parent], axis=-1)
     return lengths
+
+
+def bone_length_array(skeleton: Skeleton, lengths: dict[str, float], *,
+                      complete: bool = False) -> np.ndarray:
+    """Bone lengths as ``(J,) float64``, the length of the bone ending at each joint.
+
+    Parameters
+    ----------
+    skeleton
+        Orders the result.
+    lengths
+        ``{child joint: length}`` (a sidecar's ``bone_lengths``), any one unit.
+    complete
+        Require a positive, finite length for every bone of ``skeleton``.
+
+    Returns
+    -------
+    numpy.ndarray
+        NaN at the root (no bone ends there) and for bones ``lengths`` lacks.
+
+    Raises
+    ------
+    SkeletonError
+        If ``lengths`` names a joint that is not a bone of ``skeleton``.
+    BoneLengthError
+        With ``complete``, naming the first bone without a valid length.
+    """
+    out = np.full(skeleton.n_joints, np.nan)
+    for name, length in lengths.items():
+        joint = skeleton.index(name)
+        if joint == skeleton.root:
+            raise SkeletonError(f"'{name}' is the root of skeleton '{skeleton.name}': no bone "
+                                "ends there")
+        out[joint] = length
+    if complete:
+        for bone in skeleton.bone_names:
+            length = out[skeleton.index(bone)]
+            if not np.isfinite(length) or length <= 0:
+                raise BoneLengthError(
+                    f"skeleton '{skeleton.name}': bone '{bone}' needs a positive length, "
+                    f"got {lengths.get(bone)!r}")
+    return out

@@ -17,7 +17,6 @@ from handdb.lifting.registry import (
     DEFAULT_METHOD,
     METHODS,
     available_methods,
-    bone_length_array,
     lift,
 )
 from handdb.lifting.result import LiftResult
@@ -38,6 +37,5 @@ __all__ = [
     "METHODS",
     "LiftResult",
     "available_methods",
-    "bone_length_array",
     "lift",
 ]

@@ -33,28 +33,6 @@ def available_methods() -> tuple[str, ...]:
     return tuple(sorted(METHODS))
 
 
-def bone_length_array(skeleton: Skeleton, lengths: dict[str, float]) -> np.ndarray:
-    """Bone lengths as ``(J,) float64`` (length of the bone ending at each joint).
-
-    Parameters
-    ----------
-    skeleton
-        Orders the result.
-    lengths
-        ``{child joint: length}``, clip units (a sidecar's ``bone_lengths``).
-
-    Returns
-    -------
-    numpy.ndarray
-        NaN at the root and for bones ``lengths`` lacks.
-    """
-    out = np.full(skeleton.n_joints, np.nan)
-    for name, length in lengths.items():
-        out[skeleton.index(name)] = length
-    out[skeleton.root] = np.nan
-    return out
-
-
 def _check_inputs(uv: np.ndarray, skeleton: Skeleton, bone_lengths: np.ndarray,
                   hand: str) -> None:
     n_joints = skeleton.n_joints
@@ -93,7 +71,7 @@ def lift(
         The clip's skeleton; ``uv``'s joint axis follows its order.
     bone_lengths
         ``(J,) float64``, clip units: length of the bone ending at each joint, NaN for the
-        root (see :func:`bone_length_array`).
+        root (see :func:`~handdb.hand.skeletons.bone_length_array`).
     camera
         ``orthographic`` (scale unknown) or ``pinhole`` (intrinsics in pixels).
     method

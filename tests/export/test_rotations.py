@@ -4,13 +4,12 @@ from scipy.spatial.transform import Rotation
 
 from handdb.errors import BoneLengthError
 from handdb.export.rotations import (
-    bone_length_array,
     forward_kinematics,
     joint_rotations,
     rest_pose,
     rest_positions,
 )
-from handdb.hand.skeletons import load_skeleton
+from handdb.hand.skeletons import bone_length_array, load_skeleton
 
 from .conftest import make_hinge_motion
 
@@ -102,8 +101,9 @@ def test_nan_positions_are_refused():
 def test_bone_length_array_names_the_missing_bone():
     skeleton = load_skeleton("mediapipe21")
     lengths = {bone: 10.0 for bone in skeleton.bone_names}
-    array = bone_length_array(skeleton, lengths)
-    assert array[skeleton.root] == 0 and np.all(np.delete(array, skeleton.root) == 10.0)
+    array = bone_length_array(skeleton, lengths, complete=True)
+    assert np.isnan(array[skeleton.root]) and np.all(np.delete(array, skeleton.root) == 10.0)
     del lengths["index_dip"]
+    assert np.isnan(bone_length_array(skeleton, lengths)[skeleton.index("index_dip")])
     with pytest.raises(BoneLengthError, match="index_dip"):
-        bone_length_array(skeleton, lengths)
+        bone_length_array(skeleton, lengths, complete=True)

@@ -6,12 +6,11 @@ from scipy.spatial.transform import Rotation
 
 from handdb.export.rotations import (
     CAMERA_TO_Y_UP,
-    bone_length_array,
     forward_kinematics,
     joint_rotations,
 )
 from handdb.export.usd import export_clip_usd
-from handdb.hand.skeletons import load_skeleton
+from handdb.hand.skeletons import bone_length_array, load_skeleton
 from handdb.synthetic import synthesize_clip
 
 from .usd_reading import joint_world_positions, open_skeleton

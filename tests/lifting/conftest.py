@@ -4,8 +4,7 @@ import numpy as np
 import pytest
 
 from handdb.clip import Camera
-from handdb.hand.skeletons import load_skeleton
-from handdb.lifting import bone_length_array
+from handdb.hand.skeletons import bone_length_array, load_skeleton
 from handdb.synthetic.clips import synthesize_clip
 
 DHG_DIR = Path(__file__).resolve().parents[2] / ".." / "shared" / "data" / "dhg-sample"

@@ -2,8 +2,7 @@ import numpy as np
 
 from handdb.clip import Camera
 from handdb.hand.layout import hand_layout
-from handdb.hand.skeletons import load_skeleton
-from handdb.lifting import bone_length_array
+from handdb.hand.skeletons import bone_length_array, load_skeleton
 from handdb.lifting.finger_geometry import perspective_candidates
 from handdb.lifting.pinhole import camera_rays, ray_roots, walk_rays
 from handdb.synthetic.clips import synthesize_clip

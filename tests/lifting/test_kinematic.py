@@ -4,8 +4,8 @@ from scipy.spatial.transform import Rotation
 
 from handdb.clip import Camera
 from handdb.errors import BoneLengthError
-from handdb.hand.skeletons import load_skeleton
-from handdb.lifting import available_methods, bone_length_array, lift
+from handdb.hand.skeletons import bone_length_array, load_skeleton
+from handdb.lifting import available_methods, lift
 from handdb.synthetic.clips import synthesize_clip, thesis_clench_clip
 from handdb.synthetic.hand_model import make_hand
 from handdb.synthetic.kinematics import PALM_TO_CAMERA

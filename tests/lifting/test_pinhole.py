@@ -2,8 +2,7 @@ import numpy as np
 import pytest
 
 from handdb.clip import Camera
-from handdb.hand.skeletons import load_skeleton
-from handdb.lifting import bone_length_array
+from handdb.hand.skeletons import bone_length_array, load_skeleton
 from handdb.lifting.pinhole import camera_rays, deepest_feasible_root, estimate_root_depth
 from handdb.synthetic.clips import synthesize_clip
 

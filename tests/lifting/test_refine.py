@@ -1,8 +1,8 @@
 import numpy as np
 
 from handdb.clip import Camera
-from handdb.hand.skeletons import load_skeleton
-from handdb.lifting import bone_length_array, lift
+from handdb.hand.skeletons import bone_length_array, load_skeleton
+from handdb.lifting import lift
 from handdb.synthetic.clips import synthesize_clip
 
 
