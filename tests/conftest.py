@@ -9,8 +9,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-REPO = Path(__file__).resolve().parents[1]
-SHARED_DATA = REPO.parent / "shared" / "data"
+from tests.support.motions import HingeMotion, make_hinge_motion, perturbed_hand
+from tests.support.paths import DHG_SAMPLE, REAL_TOOLS, REPO
 
 # Prefect reads these when it is first imported: set them before any test module does.
 # Each xdist worker gets its own PREFECT_HOME (processes sharing a new database race on
@@ -29,10 +29,29 @@ os.environ.pop("PREFECT_API_URL", None)
 @pytest.fixture(scope="session")
 def dhg_sample() -> Path:
     """The real DHG capture in ../shared/data/dhg-sample; skips when it is absent."""
-    path = SHARED_DATA / "dhg-sample" / "skeletons_world.txt"
-    if not path.is_file():
-        pytest.skip(f"shared data not present: {path}")
-    return path
+    if not DHG_SAMPLE.is_file():
+        pytest.skip(f"shared data not present: {DHG_SAMPLE}")
+    return DHG_SAMPLE
+
+
+@pytest.fixture(scope="session")
+def dhg_world(dhg_sample) -> np.ndarray:
+    """The real DHG capture as ``(95, 22, 3)`` metres (skeleton ``dhg22``)."""
+    return np.loadtxt(dhg_sample).reshape(-1, 22, 3)
+
+
+@pytest.fixture(scope="session")
+def dhg_mm(dhg_world) -> np.ndarray:
+    """The real DHG capture in millimetres."""
+    return dhg_world * 1000.0
+
+
+@pytest.fixture(scope="session")
+def real_tools() -> Path:
+    """The folder of real tool outputs in ../shared/data/real-tools; skips when absent."""
+    if not REAL_TOOLS.is_dir():
+        pytest.skip(f"shared data not present: {REAL_TOOLS}")
+    return REAL_TOOLS
 
 
 N_FRAMES = 40
@@ -75,3 +94,56 @@ def inbox(tmp_path) -> Path:
     for seed, clip_id in enumerate(["alpha", "bravo", "charlie"]):
         _write_clip(path, clip_id, seed=seed)
     return path
+
+
+@pytest.fixture(params=["mediapipe21", "thesis21", "dhg22"])
+def hinge_motion(request) -> HingeMotion:
+    """Hinge motion of each skeleton preset, with known joint rotations."""
+    from handdb.hand.skeletons import load_skeleton
+
+    return make_hinge_motion(load_skeleton(request.param), n_frames=60)
+
+
+@pytest.fixture
+def mediapipe_motion() -> HingeMotion:
+    """Hinge motion of ``mediapipe21``."""
+    from handdb.hand.skeletons import load_skeleton
+
+    return make_hinge_motion(load_skeleton("mediapipe21"), n_frames=40, seed=3)
+
+
+@pytest.fixture(scope="session")
+def model():
+    """The kinematic model of the average right hand, mm."""
+    from handdb.hand.model import build_hand_model
+
+    return build_hand_model("right")
+
+
+@pytest.fixture(scope="session")
+def true_model(model):
+    """A hand unlike ``model``: another size, bone lengths and palm."""
+    return perturbed_hand(model, seed=7)
+
+
+#: Demo clips put in the test database: one with complete tracks, one with gaps.
+DEMO_DB_CLIPS = ("rapid-s01", "wave-s02")
+
+
+@pytest.fixture(scope="session")
+def demo_db(tmp_path_factory):
+    """A database holding two demo clips, built in this process (no orchestrator)."""
+    from handdb.build import BuildOptions, build_in_process
+    from handdb.demo import write_demo_inbox
+
+    root = tmp_path_factory.mktemp("gapfill-db")
+    demo, inbox = root / "demo", root / "inbox"
+    write_demo_inbox(demo)
+    inbox.mkdir()
+    for clip_id in DEMO_DB_CLIPS:
+        for path in demo.glob(f"{clip_id}.*"):
+            path.rename(inbox / path.name)
+    db = str(root / "db")
+    summary = build_in_process(inbox, db, BuildOptions(export_usd=False))
+    assert sorted(summary.processed) == sorted(DEMO_DB_CLIPS)
+    return db

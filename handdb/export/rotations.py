@@ -48,6 +48,7 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from handdb.errors import SkeletonError
+from handdb.hand.shape import mean_shape
 from handdb.hand.skeletons import FINGERS, Skeleton
 
 #: Below this bend (angle between consecutive finger bones), the flexion plane of a finger
@@ -60,13 +61,6 @@ PLANE_TRUSTED_COSINE = np.cos(np.deg2rad(75.0))
 
 #: Fingers whose MCPs define the palm frame, from the thumb side to the little side.
 PALM_FINGERS: tuple[str, ...] = ("index", "middle", "ring", "little")
-
-#: Directions of the palm root's children in the rest pose, as angles in the palm plane
-#: measured from ``+Y`` (towards the fingers) to ``+X`` (towards the thumb): degrees.
-REST_FINGER_ANGLES: dict[str, float] = {
-    "thumb": 45.0, "index": 12.0, "middle": 0.0, "ring": -12.0, "little": -24.0,
-}
-REST_PALM_ROLE_ANGLES: dict[str, float] = {"wrist": 180.0, "palm_center": 0.0}
 
 #: From handdb's camera frame (x right, y down, z away from the camera) to a Y-up,
 #: right-handed frame (x right, y up, z towards the camera): 180 degrees about x.
@@ -249,7 +243,7 @@ def joint_rotations(
     -------
     JointMotion
         Local rotations ``(T, J, 4)`` ``(w, x, y, z)`` and translations ``(T, J, 3)``. Their
-        forward kinematics (:func:`forward_kinematics`) gives back ``xyz`` when its bones
+        forward kinematics (:func:`motion_positions`) gives back ``xyz`` when its bones
         have ``bone_lengths`` or ``keep_lengths`` is ``False``; otherwise the joints reached
         by keeping each bone's direction.
     """
@@ -313,19 +307,18 @@ def world_transforms(motion: JointMotion, skeleton: Skeleton) -> tuple[np.ndarra
     return orientations, positions
 
 
-def forward_kinematics(motion: JointMotion, skeleton: Skeleton) -> np.ndarray:
+def motion_positions(motion: JointMotion, skeleton: Skeleton) -> np.ndarray:
     """World joint positions ``(T, J, 3)`` of ``motion``, clip units."""
     return world_transforms(motion, skeleton)[1]
 
 
 def rest_positions(skeleton: Skeleton, bone_lengths: np.ndarray) -> np.ndarray:
-    """Joint positions of the rest pose: a flat hand with straight fingers.
+    """Joint positions of the rest pose: the average hand with straight fingers.
 
-    The palm root sits at the origin; its children fan out in the palm plane at the
-    angles of :data:`REST_FINGER_ANGLES` (fingers) and :data:`REST_PALM_ROLE_ANGLES`
-    (wrist, palm centre); every chain continues straight along its first bone. The result
-    is expressed in its own palm frame, so the root's rest rotation is the identity:
-    fingers along ``+Y``, thumb towards ``+X``, palm normal ``+Z``.
+    The average hand of :func:`handdb.hand.shape.mean_shape` with the given bone lengths
+    (each bone along its rest direction, from the root), expressed in its own palm frame,
+    so the root's rest rotation is the identity: fingers along ``+Y``, thumb towards
+    ``+X``, palm normal ``+Z``; the root at the origin.
 
     Parameters
     ----------
@@ -339,17 +332,9 @@ def rest_positions(skeleton: Skeleton, bone_lengths: np.ndarray) -> np.ndarray:
     numpy.ndarray
         ``(J, 3) float64``, clip units.
     """
-    directions = np.zeros((skeleton.n_joints, 3))
-    positions = np.zeros((skeleton.n_joints, 3))
-    for parent, child in skeleton.bones:
-        if parent == skeleton.root:
-            finger, role = skeleton.fingers[child], skeleton.roles[child]
-            degrees = REST_FINGER_ANGLES.get(finger, REST_PALM_ROLE_ANGLES.get(role, 0.0))
-            angle = np.deg2rad(degrees)
-            directions[child] = [np.sin(angle), np.cos(angle), 0.0]
-        else:
-            directions[child] = directions[parent]
-        positions[child] = positions[parent] + bone_lengths[child] * directions[child]
+    shape = mean_shape().with_bone_lengths(skeleton, np.asarray(bone_lengths, np.float64))
+    positions = shape.positions(skeleton)
+    positions = positions - positions[skeleton.root]
     palm = palm_frame(positions[None], skeleton)[0]
     return positions @ palm
 

@@ -1,44 +1,33 @@
 """A flat, open right hand seen from the palm side: the pose a never-seen joint starts from.
 
-Coordinates are in image axes (x right, y down), in units of the wrist-to-middle-MCP
-distance, with the wrist at the origin and the fingers pointing up the image. Only the
-shape matters: it is always mapped onto a clip's observed joints by an affine fit (which
-also mirrors it for a left hand when enough joints are seen).
+The average hand of :func:`handdb.hand.shape.mean_shape`, palm to the camera and fingers up
+the image, in image axes (x right, y down), in units of the wrist-to-middle-MCP distance,
+the wrist at the origin. Only the shape matters: it is always mapped onto a clip's observed
+joints by an affine fit (which also mirrors it for a left hand when enough joints are seen).
 """
 
 from __future__ import annotations
 
+from functools import cache
+
 import numpy as np
 
-from handdb.errors import SkeletonError
-from handdb.hand.skeletons import Skeleton
+from handdb.hand.shape import mean_shape
+from handdb.hand.skeletons import Skeleton, load_skeleton
 
-#: Canonical joint name -> (x, y) of the open right hand, palm towards the camera.
-REST_POSE_2D: dict[str, tuple[float, float]] = {
-    "wrist": (0.0, 0.0),
-    "palm_fold": (0.0, -0.45),
-    "palm": (0.0, -0.5),
-    "thumb_cmc": (-0.25, -0.15),
-    "thumb_mcp": (-0.45, -0.4),
-    "thumb_ip": (-0.6, -0.6),
-    "thumb_tip": (-0.72, -0.78),
-    "index_mcp": (-0.3, -0.95),
-    "index_pip": (-0.35, -1.35),
-    "index_dip": (-0.37, -1.6),
-    "index_tip": (-0.39, -1.8),
-    "middle_mcp": (0.0, -1.0),
-    "middle_pip": (0.0, -1.45),
-    "middle_dip": (0.0, -1.72),
-    "middle_tip": (0.0, -1.95),
-    "ring_mcp": (0.22, -0.95),
-    "ring_pip": (0.26, -1.35),
-    "ring_dip": (0.28, -1.6),
-    "ring_tip": (0.3, -1.8),
-    "little_mcp": (0.42, -0.85),
-    "little_pip": (0.5, -1.15),
-    "little_dip": (0.54, -1.33),
-    "little_tip": (0.57, -1.5),
-}
+#: Image axes of the hand frame's ``x`` and ``y`` seen palm first, fingers up.
+_IMAGE_AXES = np.array([[1.0, 0.0], [0.0, -1.0], [0.0, 0.0]])
+
+
+@cache
+def _rest(name: str) -> np.ndarray:
+    skeleton = load_skeleton(name)
+    shape = mean_shape()
+    points = shape.positions(skeleton) - shape.point("wrist")
+    unit = np.linalg.norm(shape.point("middle_mcp") - shape.point("wrist"))
+    rest = points @ _IMAGE_AXES / unit
+    rest.flags.writeable = False
+    return rest
 
 
 def rest_pose_2d(skeleton: Skeleton) -> np.ndarray:
@@ -47,12 +36,6 @@ def rest_pose_2d(skeleton: Skeleton) -> np.ndarray:
     Raises
     ------
     SkeletonError
-        If a joint has no canonical rest position.
+        If a joint has no place in the hand shape.
     """
-    unknown = [j for j in skeleton.joints if j not in REST_POSE_2D]
-    if unknown:
-        raise SkeletonError(
-            f"skeleton '{skeleton.name}': no rest position for joints {unknown}; "
-            f"known: {', '.join(REST_POSE_2D)}"
-        )
-    return np.array([REST_POSE_2D[j] for j in skeleton.joints], dtype=np.float64)
+    return _rest(skeleton.name).copy()

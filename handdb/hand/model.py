@@ -1,24 +1,27 @@
-"""The 33-degree-of-freedom kinematic hand model of Zhao, Chai & Xu (SCA 2012, Figure 5).
+"""The kinematic hand: a hand shape that moves, with 33 degrees of freedom.
 
-The model lives on the ``mediapipe21`` skeleton. A pose ``q`` holds 33 numbers:
+The model of Zhao, Chai & Xu (SCA 2012, Figure 5), on any skeleton preset. A pose ``q``
+holds 33 numbers:
 
-* ``q[0:3]`` root (wrist) position, length units of the bone lengths;
-* ``q[3:6]`` root orientation as a rotation vector, radians;
-* 27 joint angles, radians, joint by joint in skeleton order: the thumb's
-  trapeziometacarpal joint (``thumb_cmc``) and its MCP joint have three degrees of freedom
-  each (abduction, flexion, twist), its IP joint one (flexion); each other finger has a
-  three-degree MCP joint and one-degree PIP and DIP joints.
+* ``q[0:3]`` root position, length units of the bone lengths;
+* ``q[3:6]`` root orientation as a rotation vector, radians (hand frame to world);
+* 27 joint angles, radians: the thumb's carpometacarpal and MCP joints have three axes
+  each (abduction, flexion, twist), its IP joint one (flexion); each long finger a
+  three-axis MCP joint and one-axis PIP and DIP joints (:data:`handdb.hand.anatomy.
+  JOINT_AXES`), in skeleton order.
 
-Each joint carries a frame. In the rest pose (every angle zero) the hand frame has x
-towards the thumb side, y from the wrist to the fingers and z out of the palm, for a right
-hand; a left hand is its mirror image in x. A finger joint's frame has y along the bone it
-moves; flexion turns about its x axis (positive bends the finger towards the palm),
-abduction about its z axis (positive towards the little finger), twist about its y axis.
-A three-degree joint applies abduction, then flexion, then twist (intrinsic z-x-y).
-The palm bones (wrist to ``thumb_cmc`` and to each MCP joint) are rigid with the root.
+A joint's angles turn the bone that leaves it (:data:`~handdb.hand.anatomy.MOVING_JOINT`):
+each such bone has a rest frame (``x`` lateral, ``y`` along the bone, ``z`` its flexion
+side, from the :class:`~handdb.hand.shape.HandShape`) in which abduction turns about ``z``,
+then flexion about the new ``x``, then twist about the new ``y`` (intrinsic z-x-y). Bones
+no joint moves (the palm's: wrist to knuckles, thumb base, palm centre, palm fold) are
+rigid with the root. The angles' conventions and ranges are :mod:`handdb.hand.anatomy`'s;
+the model's bounds widen those ranges by :data:`LIMIT_MARGIN_DEG`. A left hand is the
+mirror image of the right (``x -> -x``) and its poses mean the same motion.
 
-Bone lengths are parameters (``(..., 20)``, in ``Skeleton.bone_names`` order), so one forward
-kinematics call evaluates many frames, particles or candidate skeletons at once.
+Bone lengths and the palm's directions are parameters (``(..., B)`` and ``(..., J, 3)``),
+so one :func:`forward_kinematics` call evaluates many frames, particles or candidate
+hands at once.
 """
 
 from __future__ import annotations
@@ -29,9 +32,12 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from handdb.errors import SkeletonError
+from handdb.hand import anatomy
+from handdb.hand.anatomy import AXES, JOINT_AXES, MOVING_JOINT
+from handdb.hand.shape import HandShape, mean_shape
 from handdb.hand.skeletons import Skeleton, load_skeleton
 
-#: Skeleton preset the model is defined on.
+#: Skeleton the model is built on unless told otherwise (the marker set of Zhao et al.).
 MODEL_SKELETON = "mediapipe21"
 
 #: Number of pose parameters: 6 for the root, 27 joint angles.
@@ -41,86 +47,49 @@ N_DOF = 33
 ROOT_POSITION = slice(0, 3)
 ROOT_ROTATION = slice(3, 6)
 
-#: Axis names of a joint's angles, in the order a three-degree joint applies them, and the
-#: column of each in a joint's ``(abduction, flexion, twist)`` angle triple.
-AXES: tuple[str, ...] = ("abduction", "flexion", "twist")
-
-#: Degrees of freedom of each role that articulates.
-ROLE_DOF: dict[str, tuple[str, ...]] = {
-    "cmc": AXES,
-    "mcp": AXES,
-    "pip": ("flexion",),
-    "dip": ("flexion",),
-    "ip": ("flexion",),
-}
-
-#: Joint limits in degrees, (lower, upper), by (finger kind, role, axis); generous ranges of
-#: active motion, wide enough for tracker noise.
-JOINT_LIMITS_DEG: dict[tuple[str, str, str], tuple[float, float]] = {
-    ("thumb", "cmc", "abduction"): (-60.0, 60.0),
-    ("thumb", "cmc", "flexion"): (-60.0, 70.0),
-    ("thumb", "cmc", "twist"): (-60.0, 60.0),
-    ("thumb", "mcp", "abduction"): (-35.0, 35.0),
-    ("thumb", "mcp", "flexion"): (-35.0, 95.0),
-    ("thumb", "mcp", "twist"): (-35.0, 35.0),
-    ("thumb", "ip", "flexion"): (-35.0, 100.0),
-    ("finger", "mcp", "abduction"): (-35.0, 35.0),
-    ("finger", "mcp", "flexion"): (-45.0, 105.0),
-    ("finger", "mcp", "twist"): (-35.0, 35.0),
-    ("finger", "pip", "flexion"): (-15.0, 125.0),
-    ("finger", "dip", "flexion"): (-25.0, 105.0),
-}
-
-#: Rest-pose position of each palm joint relative to the wrist, right hand, millimetres, in
-#: the hand frame (x thumb side, y distal, z palmar): an average adult hand.
-PALM_TEMPLATE_MM: dict[str, tuple[float, float, float]] = {
-    "thumb_cmc": (22.0, 28.0, 10.0),
-    "index_mcp": (24.0, 84.0, 0.0),
-    "middle_mcp": (4.0, 86.0, 0.0),
-    "ring_mcp": (-14.0, 80.0, 0.0),
-    "little_mcp": (-30.0, 72.0, 0.0),
-}
-
-#: Rest-pose length of each finger bone of the average adult hand, millimetres.
-FINGER_TEMPLATE_MM: dict[str, float] = {
-    "thumb_mcp": 42.0, "thumb_ip": 32.0, "thumb_tip": 28.0,
-    "index_pip": 40.0, "index_dip": 23.0, "index_tip": 20.0,
-    "middle_pip": 44.0, "middle_dip": 27.0, "middle_tip": 21.0,
-    "ring_pip": 41.0, "ring_dip": 26.0, "ring_tip": 21.0,
-    "little_pip": 32.0, "little_dip": 19.0, "little_tip": 19.0,
-}
-
-#: Rest direction of the thumb metacarpal in the hand frame (towards the thumb side,
-#: distally and slightly palmar), and the roll of the thumb's frame about it, degrees,
-#: which turns its flexion across the palm.
-THUMB_REST_DIRECTION = (0.6, 0.75, 0.28)
-THUMB_ROLL_DEG = -60.0
+#: How far the model's joint bounds reach beyond the active ranges of motion, degrees:
+#: what tracker noise and marker offsets from the joint centres add to a real hand's range.
+LIMIT_MARGIN_DEG = 20.0
 
 #: Reflection that turns the right-hand model into a left hand.
 MIRROR_X = np.diag([-1.0, 1.0, 1.0])
 
+HANDS = ("right", "left")
+
 
 @dataclass(frozen=True)
 class HandModel:
-    """A kinematic hand: topology, rest geometry, degrees of freedom and joint limits.
+    """A kinematic hand: topology, rest geometry, degrees of freedom and joint bounds.
 
     Attributes
     ----------
     skeleton
-        The ``mediapipe21`` skeleton.
+        The skeleton the model moves.
     hand
         ``"right"`` or ``"left"``.
     bone_lengths
         ``(B,) float64``, one per bone in ``skeleton.bone_names`` order, length units.
     rest_directions
-        ``(J, 3) float64`` unit vectors: each bone's direction in its parent joint's frame
-        in the rest pose (right-hand coordinates; the root's row is zero).
+        ``(J, 3) float64`` unit vectors: each rigid (palm) bone's direction in the hand
+        frame, right-hand coordinates; zero for moving bones and the root.
     alignments
-        ``(J, 3, 3) float64``: the rest rotation of each joint's frame in its parent's frame.
-    dof_joint, dof_axis
-        ``(27,) int64``: the joint and the axis (index into :data:`AXES`) of each joint angle.
+        ``(J, 3, 3) float64``: the rest frame of each moving bone in its parent's frame
+        (the hand frame for a bone leaving the palm); the identity elsewhere.
+    moving
+        ``(J,) bool``: the bone ending at the joint is moved by a joint's angles.
+    dof_bone, dof_axis
+        ``(27,) int64``: the bone (its child joint) each joint angle moves, and the axis
+        (index into :data:`~handdb.hand.anatomy.AXES`).
+    dof_names
+        ``(33,)`` names: ``"root.x"``, ..., ``"index_mcp.flexion"`` (the moving joint).
     lower, upper
-        ``(33,) float64`` joint limits of the pose vector; unbounded for the root.
+        ``(33,) float64`` bounds of the pose vector; unbounded for the root.
+    dof_sign
+        ``(27,) float64``: ``-1`` where a positive anatomical angle turns the bone the
+        negative way about its axis (abduction away from the middle finger on the radial
+        side), else ``1``.
+    units
+        Length unit of ``bone_lengths``.
     """
 
     skeleton: Skeleton
@@ -128,10 +97,14 @@ class HandModel:
     bone_lengths: np.ndarray
     rest_directions: np.ndarray
     alignments: np.ndarray
-    dof_joint: np.ndarray
+    moving: np.ndarray
+    dof_bone: np.ndarray
     dof_axis: np.ndarray
+    dof_names: tuple[str, ...]
     lower: np.ndarray
     upper: np.ndarray
+    dof_sign: np.ndarray
+    units: str = "mm"
 
     @property
     def n_joints(self) -> int:
@@ -139,30 +112,29 @@ class HandModel:
         return self.skeleton.n_joints
 
     @property
-    def dof_names(self) -> tuple[str, ...]:
-        """Name of every pose parameter, ``(33,)``: ``"root.x"``, ..., ``"index_mcp.flexion"``."""
-        root = ("root.x", "root.y", "root.z", "root.rx", "root.ry", "root.rz")
-        joints = tuple(f"{self.skeleton.joints[j]}.{AXES[a]}"
-                       for j, a in zip(self.dof_joint, self.dof_axis, strict=True))
-        return root + joints
-
-    @property
     def palm_joints(self) -> np.ndarray:
-        """Indices of the joints rigid with the root (its children), ``(5,) int64``."""
-        return self.skeleton.children(self.skeleton.root)
+        """Joints at the end of rigid (palm) bones, ``(P,) int64``."""
+        return np.flatnonzero(~self.moving & (self.skeleton.parents >= 0))
 
     def with_geometry(self, bone_lengths: np.ndarray,
                       rest_directions: np.ndarray | None = None) -> HandModel:
-        """Return a copy with other bone lengths (and palm shape), leaving this model as it is."""
+        """A copy with other bone lengths (and palm directions), this model left as it is."""
         lengths = np.asarray(bone_lengths, dtype=np.float64)
         if lengths.shape != self.bone_lengths.shape or not np.all(lengths > 0):
             raise SkeletonError(f"bone lengths must be {self.bone_lengths.shape} and positive")
-        directions = self.rest_directions if rest_directions is None else _unit(rest_directions)
+        directions = (self.rest_directions if rest_directions is None
+                      else _unit(rest_directions) * ~self.moving[:, None])
         return replace(self, bone_lengths=lengths, rest_directions=directions)
 
     def rest_pose(self) -> np.ndarray:
         """Pose vector of the rest pose at the origin, ``(33,) float64``."""
         return np.zeros(N_DOF)
+
+    def bone_length_array(self) -> np.ndarray:
+        """Bone lengths by child joint, ``(J,) float64``, NaN at the root."""
+        lengths = np.full(self.n_joints, np.nan)
+        lengths[self.skeleton.bones[:, 1]] = self.bone_lengths
+        return lengths
 
 
 def _unit(vectors: np.ndarray) -> np.ndarray:
@@ -171,95 +143,122 @@ def _unit(vectors: np.ndarray) -> np.ndarray:
     return np.divide(vectors, norms, out=np.zeros_like(vectors), where=norms > 0)
 
 
-def _align_y(direction: np.ndarray, roll_deg: float = 0.0) -> np.ndarray:
-    """Rotation whose y column is ``direction``, keeping x in the hand's x-y plane, then rolled."""
-    y = _unit(direction)
-    x = _unit(np.cross(y, (0.0, 0.0, 1.0)))
-    z = np.cross(x, y)
-    basis = np.stack([x, y, z], axis=1)
-    return basis @ Rotation.from_euler("y", roll_deg, degrees=True).as_matrix()
+def _frame(along: np.ndarray, side: np.ndarray) -> np.ndarray:
+    """Rotation with ``y`` along ``along`` and ``z`` towards ``side``, ``(3, 3)``."""
+    y = _unit(along)
+    z = _unit(side - side @ y * y)
+    return np.stack([np.cross(y, z), y, z], axis=1)
 
 
-def build_hand_model(hand: str = "right", bone_lengths: dict[str, float] | None = None,
-                     units_per_mm: float = 1.0) -> HandModel:
-    """Build the hand model with the average adult geometry, or the bone lengths given.
+def moving_joint(skeleton: Skeleton, bone: int) -> str | None:
+    """Role of the joint whose angles move the bone ending at ``bone``; ``None`` if rigid."""
+    return MOVING_JOINT.get((skeleton.fingers[bone], skeleton.roles[bone]))
+
+
+def build_hand_model(hand: str = "right", bone_lengths: dict[str, float] | None = None, *,
+                     skeleton: str | Skeleton = MODEL_SKELETON,
+                     shape: HandShape | None = None, units_per_mm: float = 1.0,
+                     limit_margin_deg: float = LIMIT_MARGIN_DEG) -> HandModel:
+    """Build the kinematic model of a hand.
 
     Parameters
     ----------
     hand
         ``"right"`` or ``"left"``.
     bone_lengths
-        Child joint -> length in the model's units; bones not named keep the template
-        length (scaled by ``units_per_mm``).
+        Child joint -> length in the model's units; bones not named keep the shape's.
+    skeleton
+        The skeleton (or its preset name) the model moves.
+    shape
+        The hand at rest, in the model's units (default: the average adult hand,
+        :func:`~handdb.hand.shape.mean_shape`, scaled by ``units_per_mm``).
     units_per_mm
-        Model length units per millimetre (1 for mm, 0.001 for metres).
+        Model length units per millimetre, for the default shape.
+    limit_margin_deg
+        How far the bounds reach beyond the active ranges of motion.
 
-    Returns
-    -------
-    HandModel
+    Raises
+    ------
+    SkeletonError
+        If ``hand`` is not a hand, a named bone is not one of the skeleton's, or the
+        skeleton does not give the model its 33 degrees of freedom.
     """
-    if hand not in ("right", "left"):
+    if hand not in HANDS:
         raise SkeletonError(f"hand must be 'right' or 'left', got {hand!r}")
-    skeleton = load_skeleton(MODEL_SKELETON)
-    n = skeleton.n_joints
+    skel = load_skeleton(skeleton) if isinstance(skeleton, str) else skeleton
+    shape = shape if shape is not None else mean_shape().scaled(units_per_mm)
+    given = bone_lengths or {}
+    unknown = sorted(set(given) - set(skel.bone_names))
+    if unknown:
+        raise SkeletonError(f"not bones of '{skel.name}': {', '.join(unknown)}")
+    lengths = np.full(skel.n_joints, np.nan)
+    for name, length in given.items():
+        lengths[skel.index(name)] = length
+    if given:
+        shape = shape.with_bone_lengths(skel, lengths)
+    lengths = np.where(np.isfinite(lengths), lengths, shape.bone_lengths(skel))
+
+    points = shape.positions(skel)
+    n = skel.n_joints
+    rest_frames = np.tile(np.eye(3), (n, 1, 1))
     directions = np.zeros((n, 3))
     alignments = np.tile(np.eye(3), (n, 1, 1))
-    template = {name: float(np.linalg.norm(offset)) for name, offset in PALM_TEMPLATE_MM.items()}
-    template.update(FINGER_TEMPLATE_MM)
-    for j, name in enumerate(skeleton.joints):
-        if name in PALM_TEMPLATE_MM:
-            offset = np.array(PALM_TEMPLATE_MM[name])
-            directions[j] = offset / np.linalg.norm(offset)
-            if skeleton.fingers[j] == "thumb":
-                alignments[j] = _align_y(np.array(THUMB_REST_DIRECTION), THUMB_ROLL_DEG)
-            else:
-                alignments[j] = _align_y(offset * (1.0, 1.0, 0.0))
-        elif skeleton.parents[j] >= 0:
-            directions[j] = (0.0, 1.0, 0.0)
-
-    given = bone_lengths or {}
-    unknown = sorted(set(given) - set(skeleton.bone_names))
-    if unknown:
-        raise SkeletonError(f"not bones of '{skeleton.name}': {', '.join(unknown)}")
-    lengths = np.array([given.get(b, template[b] * units_per_mm) for b in skeleton.bone_names])
-
-    dof_joint, dof_axis, lower, upper = [], [], [], []
-    for j, role in enumerate(skeleton.roles):
-        kind = "thumb" if skeleton.fingers[j] == "thumb" else "finger"
-        for axis in ROLE_DOF.get(role, ()):
-            lo, hi = JOINT_LIMITS_DEG[(kind, role, axis)]
-            dof_joint.append(j)
+    moving = np.zeros(n, dtype=bool)
+    dof_bone, dof_axis, names, lower, upper, signs = [], [], [], [], [], []
+    margin = np.radians(limit_margin_deg)
+    for parent, child in skel.bones:
+        along = points[child] - points[parent]
+        joint = moving_joint(skel, child)
+        if joint is None:
+            directions[child] = _unit(along)
+            continue
+        finger = skel.fingers[child]
+        moving[child] = True
+        rest_frames[child] = _frame(along, shape.flexion_side(finger))
+        alignments[child] = rest_frames[parent].T @ rest_frames[child]
+        for axis in JOINT_AXES[joint]:
+            lo, hi = anatomy.range_of_motion(finger, joint, axis)
+            dof_bone.append(child)
             dof_axis.append(AXES.index(axis))
-            lower.append(np.radians(lo))
-            upper.append(np.radians(hi))
-    if len(dof_joint) + 6 != N_DOF:
-        raise SkeletonError(f"'{skeleton.name}' does not give the model's {N_DOF} DoF")
+            names.append(f"{finger}_{joint}.{axis}")
+            lower.append(lo - margin)
+            upper.append(hi + margin)
+            signs.append(anatomy.ABDUCTION_SIGN[finger] if axis == "abduction" else 1.0)
+    if len(dof_bone) + 6 != N_DOF:
+        raise SkeletonError(f"'{skel.name}' does not give the model's {N_DOF} degrees of "
+                            f"freedom (it gives {len(dof_bone) + 6})")
     return HandModel(
-        skeleton=skeleton,
+        skeleton=skel,
         hand=hand,
-        bone_lengths=np.asarray(lengths, dtype=np.float64),
+        bone_lengths=lengths[skel.bones[:, 1]],
         rest_directions=directions,
         alignments=alignments,
-        dof_joint=np.array(dof_joint, dtype=np.int64),
+        moving=moving,
+        dof_bone=np.array(dof_bone, dtype=np.int64),
         dof_axis=np.array(dof_axis, dtype=np.int64),
+        dof_names=("root.x", "root.y", "root.z", "root.rx", "root.ry", "root.rz", *names),
         lower=np.concatenate([np.full(6, -np.inf), lower]),
         upper=np.concatenate([np.full(6, np.inf), upper]),
+        dof_sign=np.array(signs),
+        units=shape.units,
     )
 
 
 def clip_to_limits(model: HandModel, pose: np.ndarray) -> np.ndarray:
-    """Return ``pose`` (``(..., 33)``) with every joint angle inside the model's limits."""
+    """Return ``pose`` (``(..., 33)``) with every joint angle inside the model's bounds."""
     return np.clip(pose, model.lower, model.upper)
 
 
 def joint_euler(model: HandModel, pose: np.ndarray) -> np.ndarray:
-    """Spread the joint angles of ``pose`` over joints, ``(..., 33) -> (..., J, 3)`` radians.
+    """Spread the joint angles of ``pose`` over bones, ``(..., 33) -> (..., J, 3)`` radians.
 
-    The last axis is ``(abduction, flexion, twist)``; angles a joint lacks are zero.
+    The last axis is ``(abduction, flexion, twist)`` of the joint moving each bone, turns
+    about the bone's rest axes (abduction signed by :attr:`HandModel.dof_sign`); angles a
+    bone lacks are zero.
     """
     pose = np.asarray(pose, dtype=np.float64)
     euler = np.zeros(pose.shape[:-1] + (model.n_joints, 3))
-    euler[..., model.dof_joint, model.dof_axis] = pose[..., 6:]
+    euler[..., model.dof_bone, model.dof_axis] = pose[..., 6:] * model.dof_sign
     return euler
 
 
@@ -298,34 +297,17 @@ def rotvec_matrices(rotvec: np.ndarray) -> np.ndarray:
             + cos_term[..., None, None] * (cross @ cross))
 
 
-def local_rotations(model: HandModel, pose: np.ndarray) -> np.ndarray:
-    """Rotation of each joint's frame in its parent's frame, ``(..., 33) -> (..., J, 3, 3)``.
+def _right_hand_pose(model: HandModel, pose: np.ndarray) -> np.ndarray:
+    """The right-hand pose whose mirror image is ``pose`` of a left-hand model.
 
-    The root's entry is its orientation in the world. For a left hand the matrices are
-    those of the right-hand model conjugated by the x mirror, so they stay proper rotations.
+    The mirror takes the root's position to ``(-x, y, z)`` and its orientation ``R`` to
+    ``M R M``; the joint angles mean the same motion of either hand.
     """
-    pose = np.asarray(pose, dtype=np.float64)
-    euler = joint_euler(model, pose)
-    local = model.alignments @ euler_matrices(euler)
-    local[..., model.skeleton.root, :, :] = rotvec_matrices(pose[..., ROOT_ROTATION])
-    if model.hand == "left":
-        local = MIRROR_X @ local @ MIRROR_X
-    return local
-
-
-def rest_offsets(model: HandModel, bone_lengths: np.ndarray | None = None,
-                 rest_directions: np.ndarray | None = None) -> np.ndarray:
-    """Each joint's offset from its parent in the parent's frame, ``(..., J, 3)``.
-
-    ``bone_lengths`` ``(..., B)`` and ``rest_directions`` ``(..., J, 3)`` default to the
-    model's. The root's offset is zero.
-    """
-    lengths = model.bone_lengths if bone_lengths is None else np.asarray(bone_lengths)
-    directions = model.rest_directions if rest_directions is None else rest_directions
-    per_joint = np.zeros(lengths.shape[:-1] + (model.n_joints,))
-    per_joint[..., model.skeleton.bones[:, 1]] = lengths
-    offsets = per_joint[..., None] * directions
-    return offsets @ MIRROR_X if model.hand == "left" else offsets
+    if model.hand == "right":
+        return pose
+    mirrored = pose.copy()
+    mirrored[..., 0] = -pose[..., 0]
+    return mirrored
 
 
 def forward_kinematics(model: HandModel, pose: np.ndarray,
@@ -345,48 +327,104 @@ def forward_kinematics(model: HandModel, pose: np.ndarray,
         ``(..., B) float64`` broadcastable against ``pose``'s leading axes; default the
         model's.
     rest_directions
-        ``(..., J, 3)`` bone directions (see :class:`HandModel`); default the model's.
+        ``(..., J, 3)`` directions of the rigid bones (see :class:`HandModel`); default the
+        model's.
     with_rotations
-        Also return each joint's world rotation.
+        Also return each bone's world frame.
 
     Returns
     -------
     positions : numpy.ndarray
         ``(..., J, 3) float64`` in the units of the bone lengths.
     rotations : numpy.ndarray
-        ``(..., J, 3, 3)`` world rotation of each joint's frame; only if ``with_rotations``.
+        ``(..., J, 3, 3)`` world frame of the bone ending at each joint (the root's: the
+        hand's orientation; a rigid bone's: its parent's); only if ``with_rotations``.
     """
-    pose = np.asarray(pose, dtype=np.float64)
-    local = local_rotations(model, pose)
-    offsets = rest_offsets(model, bone_lengths, rest_directions)
-    batch = np.broadcast_shapes(pose.shape[:-1], offsets.shape[:-2])
-    local = np.broadcast_to(local, batch + local.shape[-3:])
-    offsets = np.broadcast_to(offsets, batch + offsets.shape[-2:])
+    pose = _right_hand_pose(model, np.asarray(pose, dtype=np.float64))
+    lengths = model.bone_lengths if bone_lengths is None else np.asarray(bone_lengths)
+    directions = model.rest_directions if rest_directions is None else rest_directions
+    per_joint = np.zeros(lengths.shape[:-1] + (model.n_joints,))
+    per_joint[..., model.skeleton.bones[:, 1]] = lengths
+    batch = np.broadcast_shapes(pose.shape[:-1], per_joint.shape[:-1],
+                                np.shape(directions)[:-2])
+    per_joint = np.broadcast_to(per_joint, batch + (model.n_joints,))
+    directions = np.broadcast_to(directions, batch + (model.n_joints, 3))
+    turns = model.alignments @ euler_matrices(joint_euler(model, pose))
     skeleton = model.skeleton
-    depth = skeleton.depth()
-    positions = np.empty(batch + (model.n_joints, 3))
-    rotations = np.empty(batch + (model.n_joints, 3, 3))
     root = skeleton.root
+    positions = np.empty(batch + (model.n_joints, 3))
+    frames = np.empty(batch + (model.n_joints, 3, 3))
     positions[..., root, :] = pose[..., ROOT_POSITION]
-    rotations[..., root, :, :] = local[..., root, :, :]
+    frames[..., root, :, :] = rotvec_matrices(pose[..., ROOT_ROTATION])
+    depth = skeleton.depth()
     for level in range(1, int(depth.max()) + 1):
-        joints = np.flatnonzero(depth == level)
-        parents = skeleton.parents[joints]
-        parent_rot = rotations[..., parents, :, :]
-        moved = (parent_rot @ offsets[..., joints, :, None])[..., 0]
-        positions[..., joints, :] = positions[..., parents, :] + moved
-        rotations[..., joints, :, :] = parent_rot @ local[..., joints, :, :]
-    return (positions, rotations) if with_rotations else positions
+        at_level = np.flatnonzero(depth == level)
+        for joints, moved in ((at_level[model.moving[at_level]], True),
+                              (at_level[~model.moving[at_level]], False)):
+            if not joints.size:
+                continue
+            parents = skeleton.parents[joints]
+            parent_frames = frames[..., parents, :, :]
+            if moved:
+                frames[..., joints, :, :] = parent_frames @ turns[..., joints, :, :]
+                offsets = frames[..., joints, :, :][..., 1] * per_joint[..., joints, None]
+            else:
+                frames[..., joints, :, :] = parent_frames
+                local = directions[..., joints, :, None]
+                offsets = (parent_frames @ local)[..., 0] * per_joint[..., joints, None]
+            positions[..., joints, :] = positions[..., parents, :] + offsets
+    if model.hand == "left":
+        positions = positions @ MIRROR_X
+        frames = MIRROR_X @ frames @ MIRROR_X
+    return (positions, frames) if with_rotations else positions
 
 
-def local_quaternions(model: HandModel, pose: np.ndarray) -> np.ndarray:
-    """Per-joint local rotations as unit quaternions ``(w, x, y, z)``, ``(..., 33) -> (..., J, 4)``.
+def joint_frames(model: HandModel, bone_frames: np.ndarray) -> np.ndarray:
+    """Each joint's frame for animation: ``+Y`` along the bone to its child.
 
-    Each joint's rotation is relative to its parent joint's frame (the root's to the
-    world), with :func:`rest_offsets` as the local translations, the form UsdSkel and BVH
-    exporters take.
+    A joint with one child that a joint's angles move takes that child bone's frame; a
+    fingertip keeps its bone's frame (its parent's orientation); the root and the other
+    joints with several children (or rigid ones) keep their own.
+
+    Parameters
+    ----------
+    model
+        The hand model.
+    bone_frames
+        ``(..., J, 3, 3)`` world frames from :func:`forward_kinematics`.
     """
-    local = local_rotations(model, pose)
-    xyzw = Rotation.from_matrix(local.reshape(-1, 3, 3)).as_quat()
-    return xyzw[:, [3, 0, 1, 2]].reshape(local.shape[:-2] + (4,))
+    skeleton = model.skeleton
+    frames = bone_frames.copy()
+    for joint in range(model.n_joints):
+        children = skeleton.children(joint)
+        if len(children) == 1 and model.moving[children[0]]:
+            frames[..., joint, :, :] = bone_frames[..., children[0], :, :]
+    return frames
 
+
+def joint_transforms(model: HandModel, pose: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Local joint transforms of poses, the form the UsdSkel and BVH exporters take.
+
+    Returns
+    -------
+    rotations : numpy.ndarray
+        ``(..., J, 4)`` unit quaternions ``(w, x, y, z)``: each joint's frame
+        (:func:`joint_frames`) in its parent's (the root's in the world).
+    translations : numpy.ndarray
+        ``(..., J, 3)``: each joint's offset from its parent in the parent's frame (the
+        root's: its world position), in the model's length units.
+    """
+    positions, bone_frames = forward_kinematics(model, pose, with_rotations=True)
+    frames = joint_frames(model, bone_frames)
+    parents = model.skeleton.parents.copy()
+    root = model.skeleton.root
+    parents[root] = root
+    parent_frames = frames[..., parents, :, :]
+    local = np.swapaxes(parent_frames, -1, -2) @ frames
+    local[..., root, :, :] = frames[..., root, :, :]
+    offsets = positions - positions[..., parents, :]
+    translations = (np.swapaxes(parent_frames, -1, -2) @ offsets[..., None])[..., 0]
+    translations[..., root, :] = positions[..., root, :]
+    xyzw = Rotation.from_matrix(local.reshape(-1, 3, 3)).as_quat()
+    rotations = xyzw[:, [3, 0, 1, 2]].reshape(local.shape[:-2] + (4,))
+    return rotations, translations

@@ -19,8 +19,7 @@ import numpy as np
 
 from handdb.clip import ClipSpec
 from handdb.errors import InputError
-from handdb.hand.correspondence import correspondence
-from handdb.hand.skeletons import Skeleton, load_skeleton
+from handdb.hand.skeletons import Skeleton, correspondence, load_skeleton
 from handdb.ingest.jsondoc import load_json, number_array
 from handdb.ingest.observations import Observations
 from handdb.ingest.registry import InputFormat

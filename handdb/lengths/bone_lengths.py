@@ -16,7 +16,7 @@ population statistics last):
 5. ``ratios``: a finger's phalanges from one or more of its known phalanges and the
    X-ray relative lengths of Chaudhry et al. (:mod:`handdb.lengths.ratios`).
 6. ``anthropometric``: bones as proportions of hand length (Buchholz et al. 1992,
-   :mod:`handdb.hand.anthropometry`), the hand length estimated from the bones known so far.
+   :mod:`handdb.hand.anatomy`), the hand length estimated from the bones known so far.
 
 Sources 4-6 only scale what 1-3 give: a clip with no given lengths, no ground truth and
 no markers has no length scale at all and raises :class:`BoneLengthError`; so does a
@@ -34,7 +34,7 @@ import pyarrow as pa
 
 from handdb.clip import Clip
 from handdb.errors import BoneLengthError
-from handdb.hand.anthropometry import hand_length_proportions
+from handdb.hand.anatomy import hand_length_proportions
 from handdb.hand.skeletons import Skeleton, frame_bone_lengths
 from handdb.lengths.ratios import bone_ratios, joint_ratios, table1_measurements
 from handdb.store import tables

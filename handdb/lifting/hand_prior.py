@@ -34,6 +34,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from handdb.compiled import kernel
+from handdb.hand.anatomy import DIP_PIP_COUPLING, RANGE_OF_MOTION_DEG
 from handdb.hand.layout import CHAIN_BONES, HandLayout
 from handdb.lifting.finger_geometry import FingerCandidates, anchor_joints
 from handdb.lifting.temporal import NEGLIGIBLE_NATS
@@ -54,25 +55,41 @@ OWN_SIGN_SLOTS = np.array([2 * bone + signs[-1]
                            for bone in range(CHAIN_BONES)
                            for signs in itertools.product((0, 1), repeat=bone + 1)])
 
-#: Flexion ranges of a long finger's MCP, PIP and DIP joints, degrees (flexion positive).
-LONG_FINGER_RANGE_DEG = np.array([[-30.0, 95.0], [-5.0, 115.0], [-15.0, 95.0]])
+#: How far beyond a joint's active range (:data:`handdb.hand.anatomy.RANGE_OF_MOTION_DEG`)
+#: the prior admits a bone's angle without cost, degrees: it measures the angle in the
+#: finger's plane from noisy image points, not about the joint's own axes.
+PRIOR_MARGIN_DEG = 15.0
 
-#: Flexion ranges of the thumb's three joints below the palm, degrees.
-THUMB_RANGE_DEG = np.array([[-45.0, 90.0], [-20.0, 80.0], [-30.0, 95.0]])
+#: The joint axes whose ranges bound each bone of a chain below the palm, base to tip: a
+#: long finger's MCP, PIP and DIP flexion; the thumb's metacarpal lifts off the palm by
+#: palmar abduction at the CMC, then its MCP and IP flex.
+LONG_FINGER_AXES = (("index", "mcp", "flexion"), ("index", "pip", "flexion"),
+                    ("index", "dip", "flexion"))
+THUMB_AXES = (("thumb", "cmc", "abduction"), ("thumb", "mcp", "flexion"),
+              ("thumb", "ip", "flexion"))
+
+
+def _ranges_deg(axes: tuple[tuple[str, str, str], ...]) -> np.ndarray:
+    """``(3, 2)`` ranges of a chain's bones with the prior's margin, degrees."""
+    return np.array([RANGE_OF_MOTION_DEG[axis] for axis in axes]) + (-PRIOR_MARGIN_DEG,
+                                                                       PRIOR_MARGIN_DEG)
+
+
+#: Angle ranges of a long finger's three bones and of the thumb's, degrees (flexion
+#: positive).
+LONG_FINGER_RANGE_DEG = _ranges_deg(LONG_FINGER_AXES)
+THUMB_RANGE_DEG = _ranges_deg(THUMB_AXES)
 
 #: Softness of a range limit: a violation by this much costs one unit of log-likelihood.
 RANGE_SOFTNESS_DEG = 10.0
 
-#: DIP flexion is about this share of PIP flexion in a natural, unloaded finger.
-DIP_PIP_RATIO = 2.0 / 3.0
-
-#: Standard deviation of the DIP flexion about ``DIP_PIP_RATIO`` times the PIP's, degrees.
+#: Standard deviation of the DIP flexion about :data:`~handdb.hand.anatomy.DIP_PIP_COUPLING`
+#: times the PIP's, degrees.
 COUPLING_SIGMA_DEG = 25.0
 
 #: How far a finger's joints may go to the back of the palm plane, as a share of the
 #: finger's first bone below the palm: about sin 30° for a hyperextended MCP; the thumb
-#: stays in front of the palm (on thesis21, where the thumb hangs from the palm fold, a
-#: margin of 0.2 let its first bone tilt behind the palm: clench 0.10 -> 0.076 cm).
+#: stays in front of the palm.
 FINGER_DORSAL_MARGIN = 0.5
 THUMB_DORSAL_MARGIN = 0.0
 
@@ -407,7 +424,7 @@ def _score_states(angle, palmar, base_height, slots, ranges, range_softness, cou
                                     + _outside(dip, low[f, 2], high[f, 2], range_softness)
                                     + _dorsal(end, margin[f], dorsal_softness[f]))
                             if coupled[f]:
-                                cost += ((dip - DIP_PIP_RATIO * pip) / ratio_sigma) ** 2
+                                cost += ((dip - DIP_PIP_COUPLING * pip) / ratio_sigma) ** 2
                             relaxed = relaxed_ab + ((dip - centre) / spread) ** 2
                             state = 4 * a + 2 * b + c
                             anatomy[t, p, f, state] = 0.0 if math.isnan(cost) else -0.5 * cost

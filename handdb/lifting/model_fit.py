@@ -22,9 +22,8 @@ from scipy.optimize import least_squares
 from scipy.spatial.transform import Rotation
 
 from handdb.clip import Camera
-from handdb.hand.correspondence import convert_points
+from handdb.hand.anatomy import AXES
 from handdb.hand.model import (
-    AXES,
     N_DOF,
     ROOT_POSITION,
     ROOT_ROTATION,
@@ -32,7 +31,8 @@ from handdb.hand.model import (
     build_hand_model,
     forward_kinematics,
 )
-from handdb.hand.skeletons import Skeleton, load_skeleton
+from handdb.hand.shape import mean_shape
+from handdb.hand.skeletons import Skeleton
 from handdb.lifting.result import LiftResult
 from handdb.markers.solve import MARKER_WEIGHT, MAX_EVALUATIONS, SMOOTHNESS_WEIGHT, SOLVER_TOLERANCE
 
@@ -67,28 +67,17 @@ JACOBIAN_STEP = 1e-6
 
 def _model_lengths(skeleton: Skeleton, bone_lengths: np.ndarray,
                    hand: str) -> tuple[HandModel, float]:
-    """Build the hand model with the clip's bone lengths, in template millimetres.
+    """The hand model on the clip's skeleton with its bone lengths, in template millimetres.
 
     Returns the model and ``k``, template millimetres per clip unit (the median ratio of
-    the template's lengths to the clip's); bones the clip's skeleton lacks keep the
-    template length.
+    the average hand's lengths to the clip's).
     """
-    template = build_hand_model(hand)
-    names = template.skeleton.bone_names
-    parents = {template.skeleton.joints[c]: template.skeleton.joints[p]
-               for p, c in template.skeleton.bones}
-    given = {}
-    for name in names:
-        if name in skeleton.joints:
-            j = skeleton.index(name)
-            parent = skeleton.parents[j]
-            if parent >= 0 and skeleton.joints[parent] == parents[name]:
-                given[name] = float(bone_lengths[j])
-    if not given:
-        raise ValueError(f"skeleton '{skeleton.name}' shares no bone with the hand model")
-    template_lengths = dict(zip(names, template.bone_lengths, strict=True))
-    k = float(np.median([template_lengths[n] / length for n, length in given.items()]))
-    return build_hand_model(hand, {n: length * k for n, length in given.items()}), k
+    template = mean_shape()
+    reference = template.bone_lengths(skeleton)
+    known = np.isfinite(reference) & np.isfinite(bone_lengths) & (bone_lengths > 0)
+    k = float(np.median(reference[known] / bone_lengths[known]))
+    shape = template.with_bone_lengths(skeleton, np.where(known, bone_lengths * k, np.nan))
+    return build_hand_model(hand, skeleton=skeleton, shape=shape), k
 
 
 def _project(points: np.ndarray, params: np.ndarray, camera: Camera) -> np.ndarray:
@@ -202,7 +191,7 @@ def fit_2d(uv: np.ndarray, skeleton: Skeleton, bone_lengths: np.ndarray, camera:
     uv
         ``(T, J, 2) float64`` pixels, NaN where missing, on ``skeleton``.
     skeleton
-        The clip's skeleton; joints it shares with ``mediapipe21`` are fitted.
+        The clip's skeleton; the model moves it.
     bone_lengths
         ``(J,) float64`` clip units, length of the bone ending at each joint.
     camera
@@ -213,12 +202,11 @@ def fit_2d(uv: np.ndarray, skeleton: Skeleton, bone_lengths: np.ndarray, camera:
     Returns
     -------
     LiftResult
-        ``xyz`` in clip units for every joint the model has (NaN for others); no sign
-        confidence (NaN); length inconsistency zero (the model keeps every length).
+        ``xyz`` in clip units for every joint; no sign confidence (NaN); length
+        inconsistency zero (the model keeps every length).
     """
     model, k = _model_lengths(skeleton, bone_lengths, hand)
-    target_skeleton = load_skeleton(model.skeleton.name)
-    points = convert_points(uv, skeleton, target_skeleton)
+    points = uv
     seen = np.isfinite(points).all(axis=-1)
     fitted = np.flatnonzero(seen.sum(axis=1) >= MIN_POINTS)
     if not fitted.size:
@@ -229,8 +217,7 @@ def fit_2d(uv: np.ndarray, skeleton: Skeleton, bone_lengths: np.ndarray, camera:
         if seen[t].sum() >= MIN_POINTS:
             previous, _ = _fit_frame(model, camera, points[t], seen[t], previous, previous)
         params[t] = previous
-    joints = _positions(model, params, camera) / k
-    xyz = convert_points(joints, target_skeleton, skeleton)
+    xyz = _positions(model, params, camera) / k
     n_frames, n_joints = uv.shape[:2]
     scale = (np.exp(params[:, LOG_SCALE]) * k if camera.model == "orthographic"
              else np.full(n_frames, np.nan))

@@ -17,14 +17,11 @@ import pyarrow as pa
 from handdb.clip import METERS_PER_UNIT, ClipSpec
 from handdb.export.rotations import JointMotion
 from handdb.hand.model import (
-    AXES,
-    ROOT_POSITION,
     ROOT_ROTATION,
     HandModel,
     build_hand_model,
     forward_kinematics,
-    local_quaternions,
-    rest_offsets,
+    joint_transforms,
 )
 from handdb.lengths.bone_lengths import BoneLengths
 from handdb.lifting.result import LiftResult
@@ -199,7 +196,7 @@ def fit_positions(fit: MarkerFit) -> LiftResult:
 def joint_motion(fit: MarkerFit, units: str = "mm") -> JointMotion:
     """Return the fit's local joint transforms for the USD and BVH exporters (clip units).
 
-    Rotations are the model's own joint rotations (:func:`~handdb.hand.model.local_quaternions`)
+    Rotations are the model's own joint rotations (:func:`~handdb.hand.model.joint_transforms`)
     rather than ones inferred from positions; translations are the model's bone offsets in
     each parent's frame (``+Y`` along finger bones), the root's its world position.
 
@@ -211,10 +208,8 @@ def joint_motion(fit: MarkerFit, units: str = "mm") -> JointMotion:
         The clip's length unit, the unit of the translations.
     """
     mm_per_unit = METERS_PER_UNIT[units] * 1000.0
-    n_frames = len(fit.poses)
-    translations = np.repeat(rest_offsets(fit.model)[None] / mm_per_unit, n_frames, axis=0)
-    translations[:, fit.model.skeleton.root] = fit.poses[:, ROOT_POSITION] / mm_per_unit
-    rotations = local_quaternions(fit.model, fit.poses)
+    rotations, translations = joint_transforms(fit.model, fit.poses)
+    translations = translations / mm_per_unit
     flips = np.sum(rotations[1:] * rotations[:-1], axis=-1) < 0
     signs = np.concatenate([np.ones((1,) + flips.shape[1:]),
                             np.cumprod(np.where(flips, -1.0, 1.0), axis=0)])
@@ -236,9 +231,9 @@ def joint_angles_table(clip_id: str, model: HandModel, poses: np.ndarray) -> pa.
     poses
         ``(T, 33)`` poses.
     """
-    names = model.skeleton.joints
-    joint = [names[model.skeleton.root]] * len(ROOT_AXES) + [names[j] for j in model.dof_joint]
-    axis = list(ROOT_AXES) + [AXES[a] for a in model.dof_axis]
+    root = model.skeleton.joints[model.skeleton.root]
+    joint = [root] * len(ROOT_AXES) + [name.split(".")[0] for name in model.dof_names[6:]]
+    axis = list(ROOT_AXES) + [name.split(".")[1] for name in model.dof_names[6:]]
     angles = np.degrees(np.concatenate([poses[:, ROOT_ROTATION], poses[:, 6:]], axis=1))
     n_frames, n_angles = angles.shape
     return tables.from_columns("joint_angles", {

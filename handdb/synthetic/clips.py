@@ -16,16 +16,12 @@ import numpy as np
 import pyarrow as pa
 
 from handdb.clip import Camera, Clip, ClipSpec
+from handdb.hand.anatomy import MEAN_HAND_LENGTH_MM
+from handdb.hand.model import HandModel, forward_kinematics
 from handdb.hand.skeletons import load_skeleton
 from handdb.store import tables
-from handdb.synthetic.hand_model import (
-    DEFAULT_HAND_LENGTH_MM,
-    HandModel,
-    make_hand,
-    mirror_sign,
-    thesis_hand,
-)
-from handdb.synthetic.kinematics import PALM_TO_CAMERA, forward_kinematics, local_kinematics
+from handdb.synthetic.hands import make_hand, thesis_hand
+from handdb.synthetic.kinematics import PALM_TO_CAMERA, local_positions, model_poses
 from handdb.synthetic.motions import FIST, OPEN, Motion, make_motion
 from handdb.synthetic.projection import project_orthographic, project_pinhole
 
@@ -157,13 +153,20 @@ def _check_in_image(uv: np.ndarray, image_size: tuple[int, int]) -> None:
         )
 
 
+def _hand_length(model: HandModel) -> float:
+    """Wrist to middle fingertip of the model at rest, its units."""
+    rest = forward_kinematics(model, model.rest_pose())
+    skeleton = model.skeleton
+    return float(np.linalg.norm(rest[skeleton.index("middle_tip")] - rest[skeleton.index("wrist")]))
+
+
 def hand_centre(model: HandModel) -> np.ndarray:
     """Centre of the space the hand sweeps from open to fist, hand frame, ``(3,) float64``.
 
     The mean of every joint in the open pose and in the fist: keeping this point on the
     camera axis keeps both the spread fingertips and the curled fist in view.
     """
-    return local_kinematics(model, np.stack([OPEN, FIST])).mean(axis=(0, 1))
+    return local_positions(model, np.stack([OPEN, FIST])).mean(axis=(0, 1))
 
 
 def render_clip(
@@ -211,11 +214,11 @@ def render_clip(
     ValueError
         If the camera is unknown or a joint falls outside the image.
     """
-    mirror = mirror_sign(model.hand)
-    rotation = mirror[:, None] * motion.root_rotation * mirror[None, :]
+    mirror = np.array([-1.0 if model.hand == "left" else 1.0, 1.0, 1.0])
     home = np.array([0.0, 0.0, distance]) - PALM_TO_CAMERA @ hand_centre(model)
-    translation = home + model.hand_length * motion.root_offset * mirror
-    xyz = forward_kinematics(model, motion.angles, rotation, translation)
+    translation = home + _hand_length(model) * motion.root_offset * mirror
+    xyz = forward_kinematics(model, model_poses(model, motion.angles, motion.root_rotation,
+                                                translation))
     width, height = image_size
     center = (width / 2.0, height / 2.0)
     if camera == "orthographic":
@@ -235,7 +238,10 @@ def render_clip(
     return SyntheticClip(
         motion=motion.name, skeleton=model.skeleton.name, joints=model.skeleton.joints,
         hand=model.hand, fps=motion.fps, units=model.units, xyz=xyz, uv=uv,
-        angles=motion.angles, bone_lengths=model.bone_length_dict(), camera=camera_doc,
+        angles=motion.angles,
+        bone_lengths=dict(zip(model.skeleton.bone_names, map(float, model.bone_lengths),
+                              strict=True)),
+        camera=camera_doc,
         image_size=(int(width), int(height)), scale=scale,
     )
 
@@ -250,10 +256,10 @@ def synthesize_clip(
     hand: str = "right",
     fps: float = 30.0,
     distance_mm: float = DEFAULT_DISTANCE_MM,
-    hand_length_mm: float = DEFAULT_HAND_LENGTH_MM,
+    hand_length_mm: float | None = None,
     noise_px: float = 0.0,
 ) -> SyntheticClip:
-    """Synthesize a clip of ``motion`` by a procedural hand, in mm.
+    """Synthesize a clip of ``motion`` by a hand of the population, in mm.
 
     Parameters
     ----------
@@ -266,23 +272,27 @@ def synthesize_clip(
     camera
         ``"orthographic"`` or ``"pinhole"`` (1920x1080 image, 500 px focal length).
     seed
-        Seeds the subject's proportions (:func:`make_hand`), the motion and the pixel
-        noise: equal seeds give equal clips.
+        Seeds the hand (its size, proportions, palm and annotation conventions,
+        :func:`~handdb.hand.population.sample_shape`), the motion and the pixel noise:
+        equal seeds give equal clips, different seeds different hands.
     hand
         ``"right"`` or ``"left"`` (the mirror image of the right-hand clip).
     fps
         Frames per second.
     distance_mm
-        Camera to the hand's centre, mm (200-450 keeps the motions in the image).
+        Camera to the centre of a hand of average length, mm (200-450 keeps the motions in
+        the image); a hand of another size is placed in proportion to its length, so that
+        it fills the image alike.
     hand_length_mm
-        Wrist crease to middle fingertip, mm.
+        Wrist crease to middle fingertip, mm; drawn with the hand when ``None``.
     noise_px
         Standard deviation of Gaussian pixel noise on ``uv``; ``xyz`` stays exact.
     """
     model = make_hand(skeleton, hand_length_mm, seed=seed, hand=hand)
+    size = _hand_length(model) / MEAN_HAND_LENGTH_MM
     return render_clip(
-        model, make_motion(motion, n_frames, fps, seed), camera=camera, distance=distance_mm,
-        noise_px=noise_px, seed=seed,
+        model, make_motion(motion, n_frames, fps, seed), camera=camera,
+        distance=distance_mm * size, noise_px=noise_px, seed=seed,
     )
 
 

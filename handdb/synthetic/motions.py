@@ -19,11 +19,11 @@ import numpy as np
 from scipy.interpolate import PchipInterpolator
 from scipy.spatial.transform import Rotation
 
+from handdb.hand.anatomy import DIP_PIP_COUPLING
 from handdb.synthetic.kinematics import (
     ANGLE_INDEX,
     ANGLE_LIMITS,
     ANGLE_NAMES,
-    DIP_PIP_COUPLING,
     N_ANGLES,
     PALM_TO_CAMERA,
     clip_to_limits,
@@ -88,16 +88,17 @@ def _fingers(mcp: float, curl: float, **thumb: float) -> np.ndarray:
 
 
 #: Key poses of everyday gestures, radians. In ``PINCH`` the thumb and index tips of the
-#: average hand come within about 12 mm, pad to pad.
+#: average hand come within about 10 mm, pad to pad (hands of other shapes come closer or
+#: stay further apart).
 OPEN = pose(thumb_cmc_abduction=10.0)
 FIST = _fingers(80.0, 95.0, thumb_cmc_flexion=35.0, thumb_cmc_abduction=35.0,
                 thumb_mcp_flexion=45.0, thumb_ip_flexion=50.0)
 SPREAD = pose(index_mcp_abduction=15.0, ring_mcp_abduction=12.0, little_mcp_abduction=25.0,
               thumb_cmc_flexion=-10.0, thumb_cmc_abduction=40.0)
-PINCH = pose(index_mcp_flexion=50.0, index_curl=50.0, middle_mcp_flexion=20.0,
+PINCH = pose(index_mcp_flexion=55.0, index_curl=60.0, middle_mcp_flexion=20.0,
              middle_curl=30.0, ring_mcp_flexion=20.0, ring_curl=30.0, little_mcp_flexion=20.0,
-             little_curl=30.0, thumb_cmc_flexion=30.0, thumb_cmc_abduction=45.0,
-             thumb_mcp_flexion=20.0, thumb_ip_flexion=30.0)
+             little_curl=30.0, thumb_cmc_flexion=10.0, thumb_cmc_abduction=10.0,
+             thumb_cmc_twist=20.0, thumb_mcp_flexion=40.0, thumb_ip_flexion=50.0)
 POINT = FIST.copy()
 POINT[[ANGLE_INDEX[f"index_{d}"] for d in ("mcp_flexion", "pip_flexion", "dip_flexion")]] = 0.0
 GESTURES: dict[str, np.ndarray] = {
@@ -237,7 +238,7 @@ RANDOM_ROOT_DRIFT = np.array([0.08, 0.08, 0.04])
 #: finger's abduction from the shared spread: small enough that neighbouring fingers,
 #: which rest 5-7 deg apart, never cross.
 RANDOM_DIP_SPREAD_DEG = 8.0
-RANDOM_ABDUCTION_JITTER_DEG = {"index": 3.0, "middle": 2.0, "ring": 3.0, "little": 3.0}
+RANDOM_ABDUCTION_JITTER_DEG = {"index": 2.0, "middle": 1.5, "ring": 2.0, "little": 2.0}
 
 
 def random_motion(n_frames: int, fps: float, rng: np.random.Generator) -> Motion:

@@ -1,0 +1,58 @@
+"""Blender (bpy 4.5, in its own venv ``.venv-blender``) imports the exported USD."""
+
+import json
+import subprocess
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+import pytest
+from scipy.spatial.transform import Rotation
+
+from handdb.clip import METERS_PER_UNIT
+from handdb.export.rotations import CAMERA_TO_Y_UP
+from handdb.export.usd import export_clip_usd
+from handdb.hand.skeletons import load_skeleton
+from tests.support.motions import make_hinge_motion
+from tests.support.paths import REPO
+
+BLENDER_PYTHON = REPO / ".venv-blender" / "bin" / "python"
+IMPORT_SCRIPT = Path(__file__).with_name("blender_import.py")
+
+#: Blender's importer turns a Y-up stage to its Z-up world: +90 degrees about x.
+Y_UP_TO_BLENDER = Rotation.from_rotvec([np.pi / 2, 0.0, 0.0])
+
+pytestmark = [
+    pytest.mark.slow,
+    pytest.mark.skipif(not BLENDER_PYTHON.exists(),
+                       reason=f"no Blender Python at {BLENDER_PYTHON} (make .venv-blender)"),
+]
+
+
+@pytest.mark.parametrize(("suffix", "noise_mm"), [(".usd", 0.0), (".usdz", 2.0)])
+def test_blender_imports_an_animated_armature(tmp_path, suffix, noise_mm):
+    """Noisy joints (bones that disagree with their lengths) must come through exactly too."""
+    hinge = make_hinge_motion(load_skeleton("mediapipe21"), n_frames=40, seed=11)
+    motion = replace(hinge, xyz=hinge.xyz + np.random.default_rng(2).normal(
+        scale=noise_mm, size=hinge.xyz.shape))
+    units = "mm"
+    path = export_clip_usd(tmp_path / f"clip{suffix}", clip_id="clip-01", skeleton=motion.skeleton,
+                           xyz=motion.xyz, bone_lengths=motion.bone_lengths, fps=motion.fps,
+                           units=units, hand="right")
+    frames = [0, 17, len(motion.xyz) - 1]
+    run = subprocess.run([str(BLENDER_PYTHON), str(IMPORT_SCRIPT), str(path), *map(str, frames)],
+                         capture_output=True, text=True, timeout=300, check=False)
+    assert run.returncode == 0, run.stderr[-2000:]
+    report = json.loads(run.stdout.strip().splitlines()[-1])
+
+    assert report["armatures"] == 1
+    assert report["bones"] == list(motion.skeleton.joints)
+    assert report["action_frame_range"] == [0, len(motion.xyz) - 1]
+    assert [m["armature_modifier"] for m in report["meshes"]] == [True]
+
+    to_blender = Y_UP_TO_BLENDER * CAMERA_TO_Y_UP
+    tolerance = 1e-4 * motion.bone_lengths[motion.bone_lengths > 0].min() * METERS_PER_UNIT[units]
+    for frame in frames:
+        heads = np.array([report["heads"][str(frame)][joint] for joint in motion.skeleton.joints])
+        expected = METERS_PER_UNIT[units] * to_blender.apply(motion.xyz[frame])
+        assert np.abs(heads - expected).max() < tolerance

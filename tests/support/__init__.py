@@ -1,0 +1,1 @@
+"""Helpers the tests share: building a database, reading USD back, motions with known answers."""

@@ -1,0 +1,74 @@
+import numpy as np
+import pytest
+
+from handdb.export.mesh import hand_mesh, posed_hand_mesh, posed_vertices
+from handdb.export.rotations import rest_positions
+from handdb.hand.skeletons import load_skeleton
+from tests.support.motions import make_hinge_motion
+
+
+@pytest.fixture(params=["mediapipe21", "thesis21", "dhg22"])
+def motion_and_mesh(request):
+    motion = make_hinge_motion(load_skeleton(request.param), n_frames=12, seed=5)
+    return motion, hand_mesh(motion.skeleton, motion.bone_lengths)
+
+
+def point_segment_distance(points, start, end):
+    axis = end - start
+    s = np.clip(np.sum((points - start) * axis, axis=-1) / np.sum(axis * axis, axis=-1), 0, 1)
+    return np.linalg.norm(points - (start + s[..., None] * axis), axis=-1)
+
+
+def test_skin_weights_sum_to_one_and_indices_are_joints(motion_and_mesh):
+    motion, mesh = motion_and_mesh
+    assert 1000 < len(mesh.faces) < 5000
+    assert mesh.joint_indices.shape == mesh.joint_weights.shape == (len(mesh.vertices), 2)
+    np.testing.assert_allclose(mesh.joint_weights.sum(axis=1), 1.0)
+    assert mesh.joint_weights.min() >= 0
+    assert mesh.joint_indices.min() >= 0
+    assert mesh.joint_indices.max() < motion.skeleton.n_joints
+    assert mesh.to_trimesh().is_watertight
+
+
+def test_every_finger_bone_is_covered_in_the_rest_pose(motion_and_mesh):
+    motion, mesh = motion_and_mesh
+    skeleton = motion.skeleton
+    rest = rest_positions(skeleton, motion.bone_lengths)
+    covered = set(mesh.face_joints.tolist())
+    for parent, child in skeleton.bones:
+        if len(skeleton.children(parent)) == 1:
+            assert child in covered, skeleton.joints[child]
+    assert mesh.to_trimesh().contains(rest[[skeleton.root]]).all()
+
+
+def test_rest_joints_pose_the_rest_mesh(motion_and_mesh):
+    motion, mesh = motion_and_mesh
+    rest = rest_positions(motion.skeleton, motion.bone_lengths)
+    posed = posed_vertices(mesh, rest[None], motion.skeleton, motion.bone_lengths)
+    np.testing.assert_allclose(posed[0], mesh.vertices, atol=1e-9)
+
+
+def test_rigid_capsule_vertices_stay_on_their_posed_bone(motion_and_mesh):
+    motion, mesh = motion_and_mesh
+    skeleton = motion.skeleton
+    rest = rest_positions(skeleton, motion.bone_lengths)
+    posed = posed_vertices(mesh, motion.xyz, skeleton, motion.bone_lengths)
+    rigid = (mesh.joint_weights[:, 0] == 1.0) & (mesh.joint_indices[:, 0] != skeleton.root)
+    joint = mesh.joint_indices[rigid, 0]
+    child = np.array([skeleton.children(j)[0] for j in joint])
+    rest_distance = point_segment_distance(mesh.vertices[rigid], rest[joint], rest[child])
+    posed_distance = point_segment_distance(posed[:, rigid], motion.xyz[:, joint],
+                                            motion.xyz[:, child])
+    np.testing.assert_allclose(posed_distance, np.broadcast_to(rest_distance, posed_distance.shape),
+                               atol=1e-9)
+
+
+def test_a_ray_at_a_fingertip_hits_that_finger():
+    motion = make_hinge_motion(load_skeleton("mediapipe21"), n_frames=2)
+    skeleton = motion.skeleton
+    rest = rest_positions(skeleton, motion.bone_lengths)
+    mesh = posed_hand_mesh(rest, skeleton, motion.bone_lengths)
+    tip = skeleton.index("index_tip")
+    origin = rest[tip] + [0.0, -2.0, 500.0]
+    _, _, faces = mesh.ray.intersects_location([origin], [[0.0, 0.0, -1.0]], multiple_hits=False)
+    assert mesh.face_attributes["joint"][faces[0]] == tip

@@ -1,0 +1,84 @@
+import numpy as np
+import pytest
+
+from handdb.hand.model import forward_kinematics
+from handdb.lengths.bone_lengths import bone_lengths_table
+from handdb.markers.calibration import (
+    CALIBRATED_SOURCE,
+    calibrate,
+    calibrated_bone_lengths,
+    measured_lengths,
+    select_frames,
+)
+from handdb.store import tables
+from tests.support.motions import smooth_poses
+
+
+@pytest.fixture(scope="module")
+def capture(true_model):
+    poses = smooth_poses(true_model, 80, seed=21)
+    truth = forward_kinematics(true_model, poses)
+    rng = np.random.default_rng(8)
+    markers = truth + rng.normal(0.0, 0.5, truth.shape)
+    markers[rng.random(truth.shape[:2]) < 0.15] = np.nan
+    return markers
+
+
+@pytest.fixture(scope="module")
+def calibration(model, capture):
+    return calibrate(model, capture)
+
+
+def test_calibration_recovers_the_bone_lengths(model, true_model, calibration):
+    assert np.abs(model.bone_lengths - true_model.bone_lengths).max() > 3.0
+    errors = np.abs(calibration.model.bone_lengths - true_model.bone_lengths)
+    assert errors.max() < 1.0
+    assert errors.mean() < 0.4
+
+
+def test_calibration_recovers_the_palm_shape(true_model, calibration):
+    rest = forward_kinematics(true_model, true_model.rest_pose())
+    fitted = forward_kinematics(calibration.model, calibration.model.rest_pose())
+    palm = true_model.palm_joints
+    spread = rest[palm][:, None] - rest[palm][None]
+    fitted_spread = fitted[palm][:, None] - fitted[palm][None]
+    np.testing.assert_allclose(np.linalg.norm(fitted_spread, axis=-1),
+                               np.linalg.norm(spread, axis=-1), atol=1.0)
+
+
+def test_calibrated_model_fits_its_frames_to_the_noise(capture, calibration):
+    observed = capture[calibration.frames]
+    fitted = forward_kinematics(calibration.model, calibration.poses)
+    errors = np.linalg.norm(fitted - observed, axis=-1)
+    assert np.nanmean(errors) < 1.0
+    assert np.all(calibration.residual < 1.5)
+
+
+def test_median_marker_distances_count_frames_with_both_ends(model, capture):
+    lengths, counts = measured_lengths(model, capture)
+    both = np.isfinite(capture).all(axis=-1)
+    bones = model.skeleton.bones
+    np.testing.assert_array_equal(counts, (both[:, bones[:, 0]] & both[:, bones[:, 1]]).sum(0))
+    assert lengths.shape == model.bone_lengths.shape
+
+
+def test_calibration_frames_are_rich_and_spread():
+    visible = np.zeros((100, 21), dtype=bool)
+    visible[:, :10] = True
+    visible[::5] = True
+    frames = select_frames(visible, 8)
+    assert len(frames) == 8
+    assert np.all(visible[frames].all(axis=1))
+    assert frames.min() == 0 and frames.max() == 95
+
+
+def test_bone_length_rows_are_in_clip_units(calibration):
+    skeleton = calibration.model.skeleton
+    table = bone_lengths_table("clip", "s01", skeleton, calibrated_bone_lengths(calibration, "cm"))
+    assert table.schema.equals(tables.schema("bone_lengths"))
+    assert table.num_rows == 20
+    assert set(table.column("source").to_pylist()) == {CALIBRATED_SOURCE}
+    lengths = dict(zip(table.column("bone").to_pylist(), table.column("length").to_pylist(),
+                       strict=True))
+    bone = calibration.model.skeleton.bone_names.index("index_pip")
+    assert lengths["index_pip"] == pytest.approx(calibration.model.bone_lengths[bone] / 10.0)
