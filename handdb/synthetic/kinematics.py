@@ -72,8 +72,8 @@ def model_poses(model: HandModel, angles: np.ndarray, root_rotation: np.ndarray 
     if angles.ndim != 2 or angles.shape[1] != N_ANGLES:
         raise ValueError(f"angles must have shape (T, {N_ANGLES}), got {angles.shape}")
     n_frames = angles.shape[0]
-    rotation = np.broadcast_to(PALM_TO_CAMERA if root_rotation is None else root_rotation,
-                               (n_frames, 3, 3))
+    rotation = np.array(np.broadcast_to(PALM_TO_CAMERA if root_rotation is None
+                                        else root_rotation, (n_frames, 3, 3)))
     translation = np.broadcast_to(np.zeros(3) if root_translation is None
                                   else root_translation, (n_frames, 3))
     poses = np.zeros((n_frames, N_DOF))
