@@ -74,6 +74,21 @@ class UnknownNameError(HanddbError, ValueError):
         super().__init__(f"unknown {kind} '{name}'; known: {', '.join(known)}")
 
 
+class ParameterError(HanddbError, ValueError):
+    """A method's parameter with a value the method cannot use.
+
+    The parameters come from a sidecar's ``lift`` or ``gap_fill`` object or from the
+    command line.
+    """
+
+
+class ClipDataError(HanddbError, ValueError):
+    """A clip whose data cannot support a stage: too few points or markers, no frame to start.
+
+    The clip's files are fine as files; the message says what the data lacks.
+    """
+
+
 class RegistryError(HanddbError):
     """A registry entry added twice under one name."""
 

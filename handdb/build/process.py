@@ -46,9 +46,11 @@ class BuildContext:
 
 
 class StageFailed(HanddbError):
-    """A stage raised an error that is not about the clip's input (a bug, a full disk).
+    """Writing a clip's results into the database failed: the build fails that clip.
 
-    The original error is the ``__cause__``; ``stage`` names where it happened.
+    The database's storage is at fault (a full disk, a path that is a file), not the
+    clip; the next build tries the clip again. The original error is the ``__cause__``;
+    ``stage`` names where it happened.
     """
 
     def __init__(self, clip_id: str, stage: str, error: BaseException) -> None:
@@ -57,12 +59,29 @@ class StageFailed(HanddbError):
         super().__init__(f"{stage}: {type(error).__name__}: {error}")
 
 
-def _refusal(refused: ClipRefused, result_clip_id: str, sidecar: str) -> Refusal:
+#: What each stage does, for messages.
+STAGE_WORK: dict[str, str] = {
+    "ingest": "reading the clip's files", "lengths": "estimating bone lengths",
+    "gap_fill": "gap filling", "lift": "lifting to 3D", "validate": "validation",
+    "export": "writing its USD and previews", "commit": "storing its tables",
+}
+
+
+def _refusal(refused: ClipRefused, clip_id: str, sidecar: str, stage: str) -> Refusal:
     error = refused.error
     if isinstance(error, InputError):
-        return Refusal.from_error(error, clip_id=result_clip_id)
+        return Refusal.from_error(error, clip_id=clip_id)
     return Refusal(file=sidecar, reason=str(error), error_type=type(error).__name__,
-                   field=refused.field, clip_id=result_clip_id)
+                   field=refused.field, clip_id=clip_id, stage=stage)
+
+
+def _internal_refusal(error: Exception, clip_id: str, sidecar: str, stage: str) -> Refusal:
+    """A clip a stage broke on: refused with what happened, blaming no key of its files."""
+    return Refusal(
+        file=sidecar, error_type=type(error).__name__, clip_id=clip_id, stage=stage,
+        reason=f"{STAGE_WORK[stage]} failed on this clip ({type(error).__name__}: {error}); "
+               "its files were read, but handdb could not process them: the clip's stored "
+               "rows are kept, and the fault is handdb's, please report it with the clip")
 
 
 def _stage_runners(context: BuildContext, markers: bool
@@ -97,7 +116,8 @@ def process_clip(item: PlannedClip, context: BuildContext) -> ClipResult | Refus
     Raises
     ------
     StageFailed
-        When a stage fails for a reason other than the clip's input.
+        When writing into the database fails (an ``OSError``); any other error refuses
+        the clip, naming the stage.
     """
     clip_id = item.entry.clip_id
     start = item.start or STAGES[0]
@@ -120,7 +140,9 @@ def process_clip(item: PlannedClip, context: BuildContext) -> ClipResult | Refus
         progress.advance(clip_id, stage)
         context.store.commit_clip(clip_id, clip_tables(result, Path(context.inbox)))
     except ClipRefused as refused:
-        return _refusal(refused, clip_id, str(item.entry.sidecar))
-    except Exception as error:  # noqa: BLE001 - reported with the stage, the cause kept
+        return _refusal(refused, clip_id, str(item.entry.sidecar), stage)
+    except OSError as error:
         raise StageFailed(clip_id, stage, error) from error
+    except Exception as error:  # noqa: BLE001 - any other error refuses the clip, named
+        return _internal_refusal(error, clip_id, str(item.entry.sidecar), stage)
     return result

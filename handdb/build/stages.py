@@ -20,7 +20,15 @@ import pyarrow as pa
 
 from handdb.build.options import BuildOptions
 from handdb.clip import Clip
-from handdb.errors import BoneLengthError, HanddbError, InputError, StageError
+from handdb.errors import (
+    BoneLengthError,
+    ClipDataError,
+    HanddbError,
+    InputError,
+    ParameterError,
+    StageError,
+    UnknownNameError,
+)
 from handdb.export.preview import write_preview_png
 from handdb.export.usd import export_clip_usd
 from handdb.gapfill import DEFAULT_METHOD as DEFAULT_GAP_FILL
@@ -57,7 +65,8 @@ class ClipRefused(HanddbError):
     error
         What went wrong; an :class:`~handdb.errors.InputError` names its own file and field.
     field
-        The sidecar key the user can change to fix it, or ``None``.
+        The sidecar key the user can change to fix it, or ``None`` (never a key the
+        sidecar does not have).
     """
 
     def __init__(self, error: Exception, field: str | None = None) -> None:
@@ -106,6 +115,22 @@ def _method(choice: str | None, sidecar: dict[str, Any], default: str) -> tuple[
     return sidecar.get("method", default), params
 
 
+#: What a method's choice or parameters can be wrong by: an unknown name, parameters the
+#: method does not take, values it cannot use.
+METHOD_ERRORS = (UnknownNameError, TypeError, ParameterError)
+
+
+def _method_refusal(error: Exception, clip: Clip, key: str) -> ClipRefused:
+    """Refuse a clip for a method's choice or parameters, or for what its data lacks.
+
+    ``key`` (``gap_fill``, ``lift``) is blamed only when the sidecar has it.
+    """
+    if isinstance(error, METHOD_ERRORS):
+        given = getattr(clip.spec, key)
+        return ClipRefused(error, key if given else None)
+    return ClipRefused(error)
+
+
 def ingest(entry: ClipEntry, content_hash: str | None = None) -> Clip:
     """Read and validate the clip's files.
 
@@ -137,8 +162,8 @@ def fill(result: ClipResult, options: BuildOptions) -> ClipResult:
     method, params = _method(options.gap_fill, clip.spec.gap_fill, DEFAULT_GAP_FILL)
     try:
         filled = fill_gaps(clip.uv, clip.observed, clip.skeleton, method, **params)
-    except (TypeError, ValueError) as error:
-        raise ClipRefused(error, "gap_fill") from None
+    except (*METHOD_ERRORS, ClipDataError) as error:
+        raise _method_refusal(error, clip, "gap_fill") from None
     return replace(result, fill=filled)
 
 
@@ -150,8 +175,8 @@ def lift_clip(result: ClipResult, options: BuildOptions) -> ClipResult:
     try:
         lifted = lift(result.uv, clip.skeleton, bones.lengths, clip.spec.camera,
                       method=method, hand=clip.spec.hand, **params)
-    except (TypeError, ValueError) as error:
-        raise ClipRefused(error, "lift") from None
+    except (*METHOD_ERRORS, ClipDataError) as error:
+        raise _method_refusal(error, clip, "lift") from None
     return replace(result, lifted=lifted)
 
 
@@ -171,8 +196,8 @@ def fit_marker_clip(result: ClipResult) -> ClipResult:
     try:
         fit = fit_markers(markers, hand=spec.hand, units=spec.units,
                           bone_lengths=spec.bone_lengths or None, **params)
-    except (TypeError, ValueError) as error:
-        raise ClipRefused(error, "lift") from None
+    except (*METHOD_ERRORS, ClipDataError) as error:
+        raise _method_refusal(error, clip, "lift") from None
     return replace(result, fit=fit, lifted=fit_positions(fit),
                    bones=fitted_bone_lengths(fit, spec))
 

@@ -14,6 +14,7 @@ import typer
 from rich.console import Console
 from rich.table import Table
 
+from handdb.errors import HanddbError
 from handdb.ingest.xray import SEGMENTS
 from handdb.lengths.ratios import (
     ALL_COHORT,
@@ -53,8 +54,8 @@ def place(
     ratios, origin = load_ratios(db)
     try:
         segments = place_joints(finger, total, ratios, cohort)
-    except (KeyError, ValueError) as exc:
-        raise typer.BadParameter(str(exc).strip("'\"")) from None
+    except HanddbError as exc:
+        raise typer.BadParameter(str(exc)) from None
     grid = Table("segment", "from root", "mean", "min", "max", "range",
                  title=f"{finger} finger of length {total:g}, cohort {cohort}")
     for s in segments:

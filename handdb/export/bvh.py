@@ -32,7 +32,7 @@ from pathlib import Path
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from handdb.errors import StageError
+from handdb.errors import ParameterError, StageError
 from handdb.export.rotations import (
     CAMERA_TO_Y_UP,
     JointMotion,
@@ -168,7 +168,7 @@ def export_clip_bvh(
     """
     path = Path(path)
     if not fps > 0:
-        raise ValueError(f"fps must be positive, got {fps}")
+        raise ParameterError(f"fps must be positive, got {fps}")
     bone_lengths = np.asarray(bone_lengths, dtype=np.float64)
     if rotations is None:
         missing = ~np.isfinite(xyz).all(axis=(1, 2))

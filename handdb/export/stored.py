@@ -12,7 +12,7 @@ from pathlib import Path
 
 import numpy as np
 
-from handdb.errors import StoreError
+from handdb.errors import ParameterError, StoreError
 from handdb.export.bvh import export_clip_bvh
 from handdb.export.usd import LAYER_SUFFIXES, USDZ_SUFFIX, export_clip_usd
 from handdb.hand.skeletons import Skeleton, bone_length_array, load_skeleton
@@ -106,7 +106,7 @@ def export_stored_clip(
     """
     out = Path(out)
     if out.suffix not in EXPORT_SUFFIXES:
-        raise ValueError(f"{out}: the suffix must be one of {EXPORT_SUFFIXES}")
+        raise ParameterError(f"{out}: the suffix must be one of {EXPORT_SUFFIXES}")
     motion = read_stored_motion(db, clip_id)
     out.parent.mkdir(parents=True, exist_ok=True)
     if out.suffix == BVH_SUFFIX:

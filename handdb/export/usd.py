@@ -38,7 +38,7 @@ from pxr import Gf, Sdf, Usd, UsdGeom, UsdSkel, UsdUtils, Vt
 from scipy.spatial.transform import Rotation
 
 from handdb.clip import HANDS, METERS_PER_UNIT
-from handdb.errors import StageError
+from handdb.errors import ParameterError, StageError
 from handdb.export.mesh import INFLUENCES, hand_mesh
 from handdb.export.rotations import (
     CAMERA_TO_Y_UP,
@@ -252,13 +252,13 @@ def export_clip_usd(
     """
     path = Path(path)
     if path.suffix not in (*LAYER_SUFFIXES, USDZ_SUFFIX):
-        raise ValueError(f"{path}: the suffix must be one of {(*LAYER_SUFFIXES, USDZ_SUFFIX)}")
+        raise ParameterError(f"{path}: the suffix must be one of {(*LAYER_SUFFIXES, USDZ_SUFFIX)}")
     if units not in METERS_PER_UNIT:
-        raise ValueError(f"units '{units}' is not one of {tuple(METERS_PER_UNIT)}")
+        raise ParameterError(f"units '{units}' is not one of {tuple(METERS_PER_UNIT)}")
     if hand not in HANDS:
-        raise ValueError(f"hand '{hand}' is not one of {HANDS}")
+        raise ParameterError(f"hand '{hand}' is not one of {HANDS}")
     if not fps > 0:
-        raise ValueError(f"fps must be positive, got {fps}")
+        raise ParameterError(f"fps must be positive, got {fps}")
     xyz = np.asarray(xyz, dtype=np.float64)
     if xyz.ndim != 3 or xyz.shape[1:] != (skeleton.n_joints, 3) or len(xyz) == 0:
         raise ValueError(f"xyz must be (T, {skeleton.n_joints}, 3) with T > 0, got {xyz.shape}")

@@ -27,6 +27,7 @@ import pyarrow as pa
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
+from handdb.errors import ClipDataError, UnknownNameError
 from handdb.gapfill.masks import (
     RANDOM_GAPS,
     THESIS_CLIP_FRAMES,
@@ -106,11 +107,11 @@ def mask_segments(
                                                       n_gaps=n_gaps, seed=seed))]
     if mask == OCCLUSION_MASK:
         if xyz is None:
-            raise ValueError("the occlusion mask needs the clip's 3D joints (xyz)")
+            raise ClipDataError("the occlusion mask needs the clip's 3D joints (xyz)")
         from handdb.gapfill.occlusion import occlusion_mask
 
         return [(slice(0, n_frames), occlusion_mask(xyz, skeleton))]
-    raise ValueError(f"unknown mask '{mask}'; known: {', '.join(MASKS)}")
+    raise UnknownNameError("gap-filling mask", mask, tuple(MASKS))
 
 
 def evaluate_clip(

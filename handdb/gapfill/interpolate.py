@@ -16,6 +16,7 @@ import numpy as np
 from scipy.interpolate import CubicSpline
 
 from handdb.compiled import kernel
+from handdb.errors import UnknownNameError
 from handdb.gapfill.gaps import Gaps, find_gaps
 from handdb.gapfill.registry import MethodOutput
 from handdb.hand.skeletons import Skeleton
@@ -164,7 +165,7 @@ def interpolate_gaps(
         was never observed.
     """
     if kind not in KINDS:
-        raise ValueError(f"unknown interpolation kind '{kind}'; known: {', '.join(KINDS)}")
+        raise UnknownNameError("interpolation kind", kind, tuple(KINDS))
     gaps = find_gaps(missing)
     too_long = gaps.interior & (gaps.length > (np.inf if max_gap is None else max_gap))
     filled = uv.copy()

@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from handdb.errors import ClipDataError
 from handdb.hand.skeletons import Skeleton, load_skeleton
 
 #: Frames of the thesis's clip, and of each clip Table 4.2 applies to.
@@ -80,7 +81,8 @@ def random_gaps_mask(
     shortest, longest = gap_frames
     longest = min(longest, n_frames - 2)
     if longest < shortest:
-        raise ValueError(f"a {n_frames}-frame clip has no room for {shortest}-frame interior gaps")
+        raise ClipDataError(f"a {n_frames}-frame clip has no room for {shortest}-frame "
+                            "interior gaps")
     rng = np.random.default_rng(seed)
     length = rng.integers(shortest, longest + 1, size=n_gaps)
     start = 1 + (rng.random(n_gaps) * (n_frames - 1 - length)).astype(np.int64)

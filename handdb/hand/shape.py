@@ -16,7 +16,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from handdb.errors import SkeletonError
+from handdb.errors import ParameterError, SkeletonError
 from handdb.hand import anatomy
 from handdb.hand.skeletons import FINGERS, Skeleton
 
@@ -191,7 +191,7 @@ def shape_from_layout(metacarpal_mm: Mapping[str, float], phalanges_mm: Mapping[
 def mean_shape(hand_length_mm: float = anatomy.MEAN_HAND_LENGTH_MM) -> HandShape:
     """The average adult right hand (Buchholz et al. 1992 proportions), in millimetres."""
     if not np.isfinite(hand_length_mm) or hand_length_mm <= 0:
-        raise ValueError(f"hand_length_mm must be a positive number, got {hand_length_mm}")
+        raise ParameterError(f"hand_length_mm must be a positive number, got {hand_length_mm}")
     proportions = anatomy.BUCHHOLZ_1992
     return shape_from_layout(
         metacarpal_mm={f: hand_length_mm * c[0] for f, c in proportions.items()},

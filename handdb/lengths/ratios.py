@@ -28,7 +28,7 @@ import pyarrow as pa
 import pyarrow.compute as pc
 from scipy import stats
 
-from handdb.errors import HanddbError
+from handdb.errors import ClipDataError, HanddbError, ParameterError, UnknownNameError
 from handdb.hand.skeletons import Skeleton
 from handdb.ingest.xray import SEGMENTS, read_xray
 from handdb.store import tables
@@ -179,18 +179,20 @@ def finger_ratios(ratios: pa.Table, finger: str, cohort: str = ALL_COHORT) -> pa
 
     Raises
     ------
-    KeyError
+    UnknownNameError
+        If ``finger`` is not a finger.
+    ClipDataError
         If the table lacks a segment of the finger for that cohort.
     """
     if finger not in SEGMENTS:
-        raise KeyError(f"unknown finger '{finger}'; fingers: {', '.join(SEGMENTS)}")
+        raise UnknownNameError("finger", finger, tuple(SEGMENTS))
     rows = ratios.filter(pc.and_(pc.equal(ratios.column("cohort"), cohort),
                                  pc.equal(ratios.column("finger"), finger)))
     found = rows.column("segment").to_pylist()
     missing = [s for s in SEGMENTS[finger] if s not in found]
     if missing:
-        raise KeyError(f"joint ratios of cohort '{cohort}' lack {finger} "
-                       f"{', '.join(missing)}")
+        raise ClipDataError(f"joint ratios of cohort '{cohort}' lack {finger} "
+                            f"{', '.join(missing)}")
     return rows.sort_by("segment")
 
 
@@ -286,7 +288,7 @@ def place_joints(finger: str, total: float, ratios: pa.Table,
         One per segment, from the root of the finger.
     """
     if not np.isfinite(total) or total <= 0:
-        raise ValueError(f"a finger's total length must be greater than 0, got {total}")
+        raise ParameterError(f"a finger's total length must be greater than 0, got {total}")
     rows = finger_ratios(ratios, finger, cohort)
     mean = rows.column("mean").to_numpy() * total
     starts = np.concatenate([[0.0], np.cumsum(mean)[:-1]])

@@ -22,6 +22,7 @@ from scipy.optimize import least_squares
 from scipy.spatial.transform import Rotation
 
 from handdb.clip import Camera
+from handdb.errors import ClipDataError
 from handdb.hand.anatomy import AXES
 from handdb.hand.model import (
     N_DOF,
@@ -210,7 +211,7 @@ def fit_2d(uv: np.ndarray, skeleton: Skeleton, bone_lengths: np.ndarray, camera:
     seen = np.isfinite(points).all(axis=-1)
     fitted = np.flatnonzero(seen.sum(axis=1) >= MIN_POINTS)
     if not fitted.size:
-        raise ValueError(f"no frame has the {MIN_POINTS} image points a model fit needs")
+        raise ClipDataError(f"no frame has the {MIN_POINTS} image points a model fit needs")
     params = np.empty((len(points), N_DOF + 1))
     previous = _first_frame(model, camera, points[fitted[0]], seen[fitted[0]])
     for t in range(len(points)):

@@ -15,6 +15,7 @@ import numpy as np
 import pyarrow as pa
 
 from handdb.clip import METERS_PER_UNIT, ClipSpec
+from handdb.errors import ClipDataError, ParameterError
 from handdb.export.rotations import JointMotion
 from handdb.hand.model import (
     ROOT_ROTATION,
@@ -88,7 +89,7 @@ class MarkerFit:
 def key_frames(n_frames: int, step: int = KEY_STEP) -> np.ndarray:
     """Every ``step``-th frame and the last one, ``(K,) int64``."""
     if step < 1:
-        raise ValueError(f"key frame step must be at least 1, got {step}")
+        raise ParameterError(f"key frame step must be at least 1, got {step}")
     return np.unique(np.append(np.arange(0, n_frames, step), n_frames - 1))
 
 
@@ -139,7 +140,7 @@ def fit_markers(markers: np.ndarray, *, hand: str = "right", units: str = "mm",
         model = calibration.model
     rich = np.flatnonzero(visible.sum(axis=1) >= MIN_START_MARKERS)
     if not rich.size:
-        raise ValueError(f"no frame has the {MIN_START_MARKERS} markers a first pose needs")
+        raise ClipDataError(f"no frame has the {MIN_START_MARKERS} markers a first pose needs")
     start = initial_pose(model, mm[rich[0]], visible[rich[0]])
     rng = np.random.default_rng(seed)
     keys = key_frames(len(mm), key_step)

@@ -23,6 +23,7 @@ from scipy.ndimage import median_filter
 from scipy.optimize import least_squares
 from scipy.spatial.transform import Rotation, Slerp
 
+from handdb.errors import ClipDataError, ParameterError, UnknownNameError
 from handdb.hand.model import (
     N_DOF,
     ROOT_POSITION,
@@ -105,7 +106,7 @@ def constriction_factor(phi: float) -> float:
         Sum of the cognitive and social coefficients; must exceed 4.
     """
     if phi <= 4.0:
-        raise ValueError(f"the constriction factor needs phi > 4, got {phi}")
+        raise ParameterError(f"the constriction factor needs phi > 4, got {phi}")
     return 2.0 / abs(2.0 - phi - np.sqrt(phi * phi - 4.0 * phi))
 
 
@@ -128,7 +129,7 @@ def marker_distances(predicted: np.ndarray, observed: np.ndarray, visible: np.nd
     if correspondence == "labelled":
         return np.linalg.norm(predicted - observed, axis=-1)
     if correspondence != "nearest":
-        raise ValueError(f"correspondence must be one of {CORRESPONDENCES}, got {correspondence!r}")
+        raise UnknownNameError("marker correspondence", str(correspondence), CORRESPONDENCES)
     pairwise = np.linalg.norm(predicted[..., :, None, :] - observed[..., None, :, :], axis=-1)
     pairwise = np.where(visible[..., None, :], pairwise, np.inf)
     return pairwise.min(axis=-1)
@@ -341,7 +342,7 @@ def initial_pose(model: HandModel, observed: np.ndarray, visible: np.ndarray) ->
         ``(33,)`` pose.
     """
     if visible.sum() < 3:
-        raise ValueError("a first pose needs at least three visible markers")
+        raise ClipDataError("a first pose needs at least three visible markers")
     rest = forward_kinematics(model, model.rest_pose())
     palm = np.zeros(model.n_joints, dtype=bool)
     palm[[model.skeleton.root, *model.palm_joints]] = True
@@ -362,14 +363,14 @@ def fit_pose(model: HandModel, observed: np.ndarray, visible: np.ndarray, start:
     """Fit one frame's pose with ``solver`` (``"lsq"`` or ``"pso"``); see the two fitters."""
     if solver == "lsq":
         if correspondence != "labelled":
-            raise ValueError("the least-squares fit uses labelled markers only")
+            raise ParameterError("the least-squares fit uses labelled markers only")
         return fit_pose_lsq(model, observed, visible, start, anchor,
                             anchor_weight=anchor_weight, cutoff=cutoff)
     if solver == "pso":
         return fit_pose_pso(model, observed, visible, start, anchor, anchor_weight=anchor_weight,
                             cutoff=cutoff, correspondence=correspondence, settings=settings,
                             rng=rng)
-    raise ValueError(f"solver must be one of {SOLVERS}, got {solver!r}")
+    raise UnknownNameError("pose solver", str(solver), SOLVERS)
 
 
 def track(model: HandModel, markers: np.ndarray, *, solver: str = "lsq",

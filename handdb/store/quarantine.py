@@ -13,7 +13,7 @@ from handdb.errors import HanddbError, InputError
 from handdb.ingest.inbox import inbox_relative
 from handdb.store import tables
 
-_KEY_COLUMNS = ("file", "line", "field", "reason", "content_hash")
+_KEY_COLUMNS = ("file", "line", "field", "stage", "reason", "content_hash")
 
 
 @dataclass(frozen=True)
@@ -26,6 +26,7 @@ class Refusal:
     line: int | None = None
     field: str | None = None
     clip_id: str | None = None
+    stage: str | None = None
 
     @classmethod
     def from_error(
@@ -68,6 +69,7 @@ def quarantine_table(
             "file": inbox_relative(refusal.file, inbox),
             "line": refusal.line,
             "field": refusal.field,
+            "stage": refusal.stage,
             "reason": refusal.reason,
             "error_type": refusal.error_type,
             "clip_id": refusal.clip_id,

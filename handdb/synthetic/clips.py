@@ -16,6 +16,7 @@ import numpy as np
 import pyarrow as pa
 
 from handdb.clip import Camera, Clip, ClipSpec
+from handdb.errors import ParameterError, UnknownNameError
 from handdb.hand.anatomy import MEAN_HAND_LENGTH_MM
 from handdb.hand.model import HandModel, forward_kinematics
 from handdb.hand.skeletons import load_skeleton
@@ -147,7 +148,7 @@ def _check_in_image(uv: np.ndarray, image_size: tuple[int, int]) -> None:
     outside = (uv[..., 0] < 0) | (uv[..., 0] > width) | (uv[..., 1] < 0) | (uv[..., 1] > height)
     if outside.any():
         frame = int(np.argwhere(outside)[0, 0])
-        raise ValueError(
+        raise ParameterError(
             f"{int(outside.sum())} projected joints fall outside the {width}x{height} image "
             f"(first at frame {frame}); place the hand further from the camera"
         )
@@ -231,7 +232,7 @@ def render_clip(
                       "cx": center[0], "cy": center[1]}
         scale = None
     else:
-        raise ValueError(f"camera must be 'orthographic' or 'pinhole', got {camera!r}")
+        raise UnknownNameError("camera model", str(camera), ("orthographic", "pinhole"))
     if noise_px > 0:
         uv = uv + np.random.default_rng(seed).normal(0.0, noise_px, uv.shape)
     _check_in_image(uv, image_size)

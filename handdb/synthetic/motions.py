@@ -19,6 +19,7 @@ import numpy as np
 from scipy.interpolate import PchipInterpolator
 from scipy.spatial.transform import Rotation
 
+from handdb.errors import ParameterError, UnknownNameError
 from handdb.hand.anatomy import DIP_PIP_COUPLING
 from handdb.synthetic.kinematics import (
     ANGLE_INDEX,
@@ -299,9 +300,9 @@ def make_motion(name: str, n_frames: int, fps: float = 30.0, seed: int = 0) -> M
     Motion
     """
     if name not in MOTIONS:
-        raise ValueError(f"unknown motion {name!r}; known motions: {', '.join(MOTIONS)}")
+        raise UnknownNameError("motion", str(name), tuple(MOTIONS))
     if n_frames < 2:
-        raise ValueError(f"n_frames must be at least 2, got {n_frames}")
+        raise ParameterError(f"n_frames must be at least 2, got {n_frames}")
     if not np.isfinite(fps) or fps <= 0:
-        raise ValueError(f"fps must be a positive number, got {fps}")
+        raise ParameterError(f"fps must be a positive number, got {fps}")
     return MOTIONS[name](int(n_frames), float(fps), np.random.default_rng(seed))

@@ -7,6 +7,7 @@ import pyarrow.compute as pc
 import pytest
 from scipy import stats
 
+from handdb.errors import ClipDataError
 from handdb.ingest.xray import read_xray
 from handdb.lengths.ratios import (
     joint_ratios,
@@ -123,7 +124,7 @@ def test_place_joints_refuses_a_bad_total(table1, total):
 
 
 def test_place_joints_names_a_missing_cohort(table1):
-    with pytest.raises(KeyError, match="sex:f"):
+    with pytest.raises(ClipDataError, match="sex:f"):
         place_joints("index", 1.0, joint_ratios(table1), cohort="sex:f")
 
 

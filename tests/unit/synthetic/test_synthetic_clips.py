@@ -5,6 +5,7 @@ import json
 import numpy as np
 import pytest
 
+from handdb.errors import UnknownNameError
 from handdb.hand.skeletons import load_skeleton
 from handdb.ingest.sidecar import parse_sidecar
 from handdb.store import tables
@@ -131,5 +132,5 @@ def test_thesis_clench_is_the_maya_hand_closing_with_a_still_palm():
 
 
 def test_unknown_camera_is_refused():
-    with pytest.raises(ValueError, match="camera must be"):
+    with pytest.raises(UnknownNameError, match="unknown camera model 'fisheye'"):
         synthesize_clip("clench", 10, camera="fisheye")
