@@ -23,7 +23,7 @@ passes its own (e.g. fitted) :class:`~handdb.export.rotations.JointMotion`. By d
 animation reproduces the positions exactly: where they disagree with the bone lengths
 (noisy lifting), a bone takes its measured length in that frame through the joint's
 translation channel. ``keep_lengths=True`` imposes the bone lengths instead (rigid bones,
-measured directions). The bind and rest pose is the flat hand of
+measured directions). The bind and rest pose is the average hand of
 :func:`handdb.export.rotations.rest_pose` with the given bone lengths; the mesh is built in it.
 """
 

@@ -27,7 +27,7 @@ THESIS_TABLE_4_2: dict[int, tuple[int, int]] = {
     16: (33, 37), 17: (37, 47), 18: (50, 99),
 }
 
-#: Random gaps: count and length range (frames, inclusive) of the issue's target.
+#: Random gaps: how many, and their length range (frames, inclusive).
 RANDOM_GAPS = 40
 RANDOM_GAP_FRAMES = (1, 60)
 

@@ -35,18 +35,16 @@ DEPTH_GRID = 48
 BISECTION_STEPS = 12
 
 #: Smoothing of the per-frame root depth bounds (of their inverses, as for the scale): the
-#: median over +-2 frames, then a Gaussian of 1 frame. Each frame's bound is within 0.5 %
-#: of the truth on synthetic rapid gestures, while the hand's distance changes by a few
-#: per cent within a second: a wide window (the median over +-40 frames) lagged the
-#: motion, with errors of 1 % and pinhole depth errors of 10 mm instead of 7.
+#: median over +-2 frames, then a Gaussian of 1 frame. A frame's bound is close to the
+#: truth while the hand's distance changes by a few per cent within a second, so a short
+#: window follows the motion where a long one lags it.
 ROOT_DEPTH_PERCENTILE = 50.0
 ROOT_DEPTH_HALF_WINDOW = 2
 ROOT_DEPTH_SMOOTHING_FRAMES = 1.0
 
 #: A root depth counts as feasible while the least summed excess of the bones stays below
-#: this share of their total length: room for tracking noise. (Synthetic rapid gestures,
-#: held-out seeds: 1e-3 gave 7.4 mm, 3e-4 5.5 mm, 1e-4 4.9 mm; the real DHG capture
-#: 14.1, 13.4 and 13.5 mm.)
+#: this share of their total length: room for tracking noise (the choice is measured in
+#: ``benchmarks/RESULTS-lifting.md``).
 EXCESS_TOLERANCE = 1e-4
 
 

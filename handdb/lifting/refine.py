@@ -12,10 +12,8 @@ sparse Jacobian) to
   of the image plane the hand prior chose.
 
 The seed clamps every inconsistent bone into the image plane; the refinement spreads the
-misfit over lengths and motion instead. Measured (``benchmarks/RESULTS-lifting.md``): it
-changes the mean depth error by well under a millimetre on synthetic rapid gestures and on
-the DHG capture, where the remaining error is wrong depth signs, which a local fit cannot
-undo; it costs seconds per clip.
+misfit over lengths and motion instead. It cannot undo a wrong depth sign, which a local
+fit does not cross, and costs seconds per clip (``benchmarks/RESULTS-lifting.md``).
 """
 
 from __future__ import annotations

@@ -37,14 +37,14 @@ from handdb.markers.solve import (
 )
 from handdb.store import tables
 
-#: Pose solver used unless asked otherwise: least squares, which reached the swarm's
-#: accuracy many times faster (``benchmarks/bench_fitting.py``).
+#: Pose solver used unless asked otherwise: least squares, which reaches the swarm's
+#: accuracy in a fraction of its time (``benchmarks/RESULTS-fitting.md``).
 DEFAULT_SOLVER = "lsq"
 
 #: Frames from one key frame to the next. The paper's key frames are its Kinect frames
 #: (a quarter of its Vicon frames); with markers alone every frame can be a key frame,
-#: which measured more accurate on fast motion (2.3 mm against 3.2 mm MPJPE with a step of
-#: 4, ``benchmarks/bench_fitting.py``); a larger step trades accuracy for speed.
+#: which follows fast motion best (``benchmarks/RESULTS-fitting.md``); a larger step
+#: trades accuracy for speed.
 KEY_STEP = 1
 
 #: Name of the method in ``joints_3d.lift_method`` and ``clips.lift_method``.
