@@ -346,6 +346,7 @@ def write_query_database(db: Path, n_rows: int) -> int:
             "fill_method": pa.nulls(n, pa.string()), "x": xyz[:, 0], "y": xyz[:, 1],
             "z": xyz[:, 2], "lift_method": "default", "scale": np.ones(n),
             "sign_confidence": np.ones(n), "length_inconsistency": np.zeros(n),
+            "residual": pa.nulls(n, pa.float64()), "flagged": np.zeros(n, bool),
         }))
         store.write("truth_3d", clip_id, tables.from_columns("truth_3d", {
             "clip_id": clip_id, "frame": frame, "joint": joint, "joint_index": joint_index,

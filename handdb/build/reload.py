@@ -24,6 +24,7 @@ from handdb.lifting import LiftResult
 from handdb.store.clips import read_partition, scatter, stored_clip
 from handdb.store.database import Store
 from handdb.validation.depth import markdown_summary
+from handdb.validation.plausibility import Verdict
 
 
 def _clip(store: Store, entry: ClipEntry, content_hash: str) -> Clip:
@@ -90,9 +91,13 @@ def resume(store: Store, entry: ClipEntry, content_hash: str, keys: dict[str, st
     clip = _clip(store, entry, content_hash)
     row = read_partition(store, "clips", clip.clip_id).to_pylist()[0]
     joints = (read_partition(store, "joints_3d", clip.clip_id)
-              if "gap_fill" in done or "lift" in done else None)
+              if {"gap_fill", "lift", "validate"} & set(done) else None)
     validation = (read_partition(store, "validation_joint", clip.clip_id)
                   if "validate" in done and row["has_truth"] else None)
+    verdict = (Verdict(reasons=tuple(row["flag_reasons"]),
+                       rows=joints.column("flagged").to_numpy(zero_copy_only=False).reshape(
+                           clip.observed.shape))
+               if "validate" in done else None)
     return ClipResult(
         clip=clip, keys=keys,
         bones=stored_bone_lengths(store, clip) if "lengths" in done else None,
@@ -100,4 +105,5 @@ def resume(store: Store, entry: ClipEntry, content_hash: str, keys: dict[str, st
         lifted=_stored_lift(joints, clip, row["lift_method"]) if "lift" in done else None,
         validation=validation,
         report=markdown_summary(clip.clip_id, validation) if validation is not None else None,
+        verdict=verdict,
     )

@@ -38,6 +38,9 @@ def joints_3d_table(result: ClipResult) -> pa.Table:
         filled, fill_method = np.zeros(n, dtype=bool), np.full(n, None)
     xyz = lifted.xyz.reshape(n, 3) if lifted is not None else np.full((n, 3), np.nan)
     lifted_rows = np.isfinite(xyz).all(axis=-1)
+    residual = result.fit.residual.reshape(n) if result.fit is not None else np.full(n, np.nan)
+    flagged = (result.verdict.rows.reshape(n) if result.verdict is not None
+               else np.zeros(n, dtype=bool))
     return tables.from_columns("joints_3d", {
         "clip_id": clip.clip_id,
         "frame": np.repeat(np.arange(n_frames, dtype=np.int32), n_joints),
@@ -58,6 +61,8 @@ def joints_3d_table(result: ClipResult) -> pa.Table:
                   else np.full(n, np.nan)),
         "sign_confidence": _flat(lifted.sign_confidence if lifted else None, n),
         "length_inconsistency": _flat(lifted.length_inconsistency if lifted else None, n),
+        "residual": pa.array(residual, from_pandas=True),
+        "flagged": flagged,
     })
 
 
@@ -88,6 +93,8 @@ def clips_table(result: ClipResult, source_files: list[str]) -> pa.Table:
         "gap_fill_method": [result.fill.method if result.fill else None],
         "lift_method": [result.lifted.method if result.lifted else None],
         "has_truth": [clip.truth is not None],
+        "flagged": [result.verdict is not None and result.verdict.flagged],
+        "flag_reasons": [list(result.verdict.reasons) if result.verdict is not None else []],
         "sidecar": [spec.raw],
         "usd_path": [result.usd_path],
         "handdb_version": [__version__],

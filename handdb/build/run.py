@@ -58,6 +58,7 @@ class BuildSummary:
     refusals: list[Refusal] = field(default_factory=list)
     failed: dict[str, str] = field(default_factory=dict)
     validation: dict[str, dict[str, dict[str, float]]] = field(default_factory=dict)
+    flagged: dict[str, tuple[str, ...]] = field(default_factory=dict)
     timings: dict[str, float] = field(default_factory=dict)
     removed_temporaries: int = 0
 
@@ -132,6 +133,8 @@ class Build:
             summary.n_frames += outcome.clip.n_frames
             if outcome.validation is not None:
                 summary.validation[clip_id] = clip_summary(outcome.validation)
+            if outcome.verdict is not None and outcome.verdict.flagged:
+                summary.flagged[clip_id] = outcome.verdict.reasons
             progress.advance(clip_id, "done")
 
     def finish(self) -> BuildSummary:
@@ -208,11 +211,17 @@ def summary_markdown(summary: BuildSummary) -> str:
         f"unchanged {len(summary.unchanged)}, failed {len(summary.failed)}",
         f"- frames processed: {summary.n_frames}",
         f"- refused inputs (quarantine): {len(summary.refusals)}",
+        f"- flagged as implausible: {len(summary.flagged)}",
     ]
     if summary.refusals:
         lines += ["", "| file | line | field | reason |", "|---|---|---|---|"]
         lines += [f"| {r.file} | {r.line or ''} | {r.field or ''} | {r.reason} |"
                   for r in summary.refusals]
+    if summary.flagged:
+        lines += ["", "Flagged clips: stored, but no human hand could produce them:", "",
+                  "| clip | why |", "|---|---|"]
+        lines += [f"| {clip_id} | {'; '.join(reasons)} |"
+                  for clip_id, reasons in sorted(summary.flagged.items())]
     if summary.validation:
         lines += ["", "Depth against ground truth, processed clips (clip units):", "",
                   "| clip | method | mean abs dZ | sign accuracy | MPJPE |",

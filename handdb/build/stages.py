@@ -46,6 +46,7 @@ from handdb.markers.fit import (
 )
 from handdb.store.database import Store
 from handdb.validation.depth import comparison_chart, markdown_summary, validation_table
+from handdb.validation.plausibility import Verdict, assess
 
 #: Lifting methods compared against ground truth for every 2D clip that has it.
 VALIDATED_METHODS: tuple[str, ...] = ("thesis", "thesis-nocheck", DEFAULT_LIFT)
@@ -90,6 +91,7 @@ class ClipResult:
     fit: MarkerFit | None = None
     validation: pa.Table | None = None
     report: str | None = None
+    verdict: Verdict | None = None
     usd_path: str | None = None
 
     @property
@@ -203,12 +205,20 @@ def fit_marker_clip(result: ClipResult) -> ClipResult:
 
 
 def validate(result: ClipResult, options: BuildOptions) -> ClipResult:
-    """Compare the lifting methods against the clip's ground truth, if it has any."""
+    """Check the result against what hands can be; compare it with the ground truth, if any.
+
+    The plausibility gate (:func:`handdb.validation.plausibility.assess`) runs on every
+    clip; the lifting methods are compared on clips with ground truth.
+    """
     clip = result.clip
-    if clip.truth is None:
-        return result
     lifted = _needs(result.lifted, "lift", result)
     bones = _needs(result.bones, "bone lengths", result)
+    residual = result.fit.residual if result.fit is not None else None
+    verdict = assess(clip.skeleton, clip.spec.units, clip.spec.hand, bones.lengths,
+                     lifted.xyz, residual)
+    result = replace(result, verdict=verdict)
+    if clip.truth is None:
+        return result
     estimates: dict[str, LiftResult | np.ndarray] = {lifted.method: lifted}
     methods = (*VALIDATED_METHODS, *options.compare) if clip.markers is None else ()
     for method in methods:

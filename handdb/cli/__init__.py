@@ -84,17 +84,19 @@ def run_build(inbox: str, db: str, options=None, *, workers: int = 4,
 
 
 def print_summary(summary) -> None:
-    """Print a build summary: clips, refusals, failures."""
+    """Print a build summary: clips, refusals, implausible results, failures."""
     console.print(
         f"[bold]built[/] {summary.db}: {summary.n_clips} clips in the inbox, "
         f"{len(summary.processed)} processed ({summary.n_frames} frames), "
         f"{len(summary.unchanged)} unchanged, "
-        f"{len(summary.refusals)} refused, {len(summary.failed)} failed "
-        f"({sum(summary.timings.values()):.1f} s)",
+        f"{len(summary.refusals)} refused, {len(summary.flagged)} flagged, "
+        f"{len(summary.failed)} failed ({sum(summary.timings.values()):.1f} s)",
         soft_wrap=True,
     )
     for refusal in summary.refusals:
         console.print(f"  [yellow]quarantined[/] {refusal}", soft_wrap=True)
+    for clip_id, reasons in summary.flagged.items():
+        console.print(f"  [yellow]flagged[/] {clip_id}: {'; '.join(reasons)}", soft_wrap=True)
     for clip_id, error in summary.failed.items():
         console.print(f"  [red]failed[/] {clip_id}: {error}", soft_wrap=True)
 

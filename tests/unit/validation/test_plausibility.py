@@ -1,0 +1,129 @@
+"""The plausibility gate: real and synthetic hands pass, what no hand could do is flagged."""
+
+import json
+
+import numpy as np
+import pytest
+
+from handdb.hand.skeletons import frame_bone_lengths, load_skeleton
+from handdb.synthetic import synthesize_clip
+from handdb.validation.plausibility import assess, flexion_angles
+
+MEDIAPIPE = load_skeleton("mediapipe21")
+
+#: InterHand2.6M's 21 joints of one hand, in its order (tip to base per finger, wrist last).
+INTERHAND_ORDER = (
+    "thumb_tip", "thumb_ip", "thumb_mcp", "thumb_cmc", "index_tip", "index_dip", "index_pip",
+    "index_mcp", "middle_tip", "middle_dip", "middle_pip", "middle_mcp", "ring_tip",
+    "ring_dip", "ring_pip", "ring_mcp", "little_tip", "little_dip", "little_pip",
+    "little_mcp", "wrist",
+)
+
+
+def lengths_of(clip):
+    return np.array([clip.bone_lengths.get(j, np.nan) for j in MEDIAPIPE.joints])
+
+
+@pytest.fixture(scope="module")
+def clip():
+    return synthesize_clip("random", 120, seed=2)
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_hands_of_the_population_pass(seed):
+    clip = synthesize_clip("random", 200, seed=seed, hand="left" if seed % 2 else "right")
+    verdict = assess(MEDIAPIPE, "mm", clip.hand, lengths_of(clip), clip.xyz)
+    assert not verdict.flagged, verdict.reasons
+    assert not verdict.rows.any()
+
+
+def test_real_interhand_hands_pass(real_tools):
+    doc = json.loads((real_tools / "interhand" / "test_interhand2.6m_joint_3d.json").read_text())
+    checked = 0
+    for frames in doc.values():
+        for frame in frames.values():
+            world = np.array(frame["world_coord"])
+            valid = np.array(frame["joint_valid"]).ravel() > 0
+            for hand, first in (("right", 0), ("left", 21)):
+                if not valid[first:first + 21].all():
+                    continue
+                points = world[first:first + 21][[INTERHAND_ORDER.index(j)
+                                                  for j in MEDIAPIPE.joints]]
+                lengths = frame_bone_lengths(points[None], MEDIAPIPE)[0]
+                verdict = assess(MEDIAPIPE, "mm", hand, lengths, points[None])
+                assert not verdict.flagged, verdict.reasons
+                checked += 1
+    assert checked >= 4
+
+
+def test_the_noisy_dhg_tracker_is_flagged_for_what_no_hand_does(dhg_mm):
+    dhg = load_skeleton("dhg22")
+    lengths = np.full(dhg.n_joints, np.nan)
+    bones = dhg.bones[:, 1]
+    lengths[bones] = np.nanmedian(frame_bone_lengths(dhg_mm, dhg)[:, bones], axis=0)
+    verdict = assess(dhg, "mm", "right", lengths, dhg_mm)
+    assert verdict.flagged
+    assert any("range of motion" in reason for reason in verdict.reasons)
+    angles = flexion_angles(dhg, dhg_mm, "right")
+    assert np.nanmin(angles[("index", "dip", "flexion")]) < -60  # a DIP bent far backwards
+
+
+def test_an_impossible_metacarpal_and_phalanges_are_flagged(clip):
+    lengths = lengths_of(clip)
+    lengths[MEDIAPIPE.index("index_mcp")] = 222.0
+    lengths[MEDIAPIPE.index("index_pip")] = 142.0
+    verdict = assess(MEDIAPIPE, "mm", "right", lengths, None, n_frames=clip.n_frames)
+    text = " ".join(verdict.reasons)
+    assert "index_mcp is 222 mm" in text and "index_pip is 142 mm" in text
+    assert verdict.rows[:, MEDIAPIPE.index("index_mcp")].all()
+    assert not verdict.rows[:, MEDIAPIPE.index("ring_pip")].any()
+
+
+def test_a_middle_phalanx_longer_than_the_proximal_is_flagged(clip):
+    lengths = lengths_of(clip)
+    pip, dip = MEDIAPIPE.index("ring_pip"), MEDIAPIPE.index("ring_dip")
+    lengths[pip], lengths[dip] = lengths[dip], lengths[pip]
+    verdict = assess(MEDIAPIPE, "mm", "right", lengths, None, n_frames=clip.n_frames)
+    assert any("ring finger's phalanges are out of proportion" in r for r in verdict.reasons)
+
+
+def test_fingers_bent_backwards_are_flagged(clip):
+    xyz = clip.xyz.copy()
+    pip, dip, tip = MEDIAPIPE.indices(["middle_pip", "middle_dip", "middle_tip"])
+    mcp = MEDIAPIPE.index("middle_mcp")
+    wrist, index, little = MEDIAPIPE.indices(["wrist", "index_mcp", "little_mcp"])
+    normal = np.cross(xyz[:, index] - xyz[:, wrist], xyz[:, little] - xyz[:, wrist])
+    normal /= np.linalg.norm(normal, axis=-1, keepdims=True)
+    along = (xyz[:, pip] - xyz[:, mcp]) / np.linalg.norm(xyz[:, pip] - xyz[:, mcp], axis=-1,
+                                                          keepdims=True)
+    backwards = np.cos(np.radians(100)) * along - np.sin(np.radians(100)) * normal
+    xyz[:, dip] = xyz[:, pip] + 25.0 * backwards
+    xyz[:, tip] = xyz[:, dip] + 20.0 * backwards
+    verdict = assess(MEDIAPIPE, "mm", "right", lengths_of(clip), xyz)
+    assert any("middle PIP" in reason for reason in verdict.reasons)
+    assert verdict.rows[:, 0].all()
+
+
+def test_a_bone_that_stretches_is_flagged(clip):
+    xyz = clip.xyz.copy()
+    tip, dip = MEDIAPIPE.indices(["index_tip", "index_dip"])
+    stretch = 1.0 + 0.8 * np.sin(np.arange(len(xyz)) / 3.0) ** 2
+    xyz[:, tip] = xyz[:, dip] + (xyz[:, tip] - xyz[:, dip]) * stretch[:, None]
+    verdict = assess(MEDIAPIPE, "mm", "right", lengths_of(clip), xyz)
+    assert any("index_tip changes length" in reason for reason in verdict.reasons)
+
+
+def test_a_model_that_misses_its_markers_is_flagged(clip):
+    residual = np.full(clip.xyz.shape[:2], 1.5)
+    verdict = assess(MEDIAPIPE, "mm", "right", lengths_of(clip), clip.xyz, residual)
+    assert not verdict.flagged
+    residual[: len(residual) // 2] = 25.0
+    verdict = assess(MEDIAPIPE, "mm", "right", lengths_of(clip), clip.xyz, residual)
+    assert any("does not fit the markers" in reason for reason in verdict.reasons)
+    assert verdict.rows[0].all() and not verdict.rows[-1].any()
+
+
+def test_units_are_respected(clip):
+    lengths = lengths_of(clip) / 10.0
+    assert not assess(MEDIAPIPE, "cm", "right", lengths, clip.xyz / 10.0).flagged
+    assert assess(MEDIAPIPE, "mm", "right", lengths, None, n_frames=3).flagged
