@@ -56,6 +56,7 @@ class ClipSpec:
     units: str
     camera: Camera
     bone_lengths: dict[str, float] = field(default_factory=dict)
+    hand_length: float | None = None
     min_confidence: float = DEFAULT_MIN_CONFIDENCE
     joint_map: dict[str, str] = field(default_factory=dict)
     image_width: int | None = None

@@ -39,6 +39,7 @@ def stored_bone_lengths(store: Store, clip: Clip) -> BoneLengths:
     rows = read_partition(store, "bone_lengths", clip.clip_id).to_pylist()
     lengths = np.full(skeleton.n_joints, np.nan)
     residuals = np.full(skeleton.n_joints, np.nan)
+    uncertainty = np.full(skeleton.n_joints, np.nan)
     n_frames = np.zeros(skeleton.n_joints, dtype=np.int64)
     sources: list[str | None] = [None] * skeleton.n_joints
     details: list[str | None] = [None] * skeleton.n_joints
@@ -46,11 +47,12 @@ def stored_bone_lengths(store: Store, clip: Clip) -> BoneLengths:
         j = skeleton.index(row["bone"])
         lengths[j] = row["length"]
         residuals[j] = np.nan if row["residual"] is None else row["residual"]
+        uncertainty[j] = np.nan if row["uncertainty"] is None else row["uncertainty"]
         n_frames[j] = row["n_frames"] or 0
         sources[j], details[j] = row["source"], row["detail"]
     return BoneLengths(skeleton=skeleton, units=rows[0]["units"], lengths=lengths,
                        sources=tuple(sources), details=tuple(details), residuals=residuals,
-                       n_frames=n_frames)
+                       n_frames=n_frames, uncertainty=uncertainty)
 
 
 def _stored_fill(joints: pa.Table, clip: Clip, method: str) -> FillResult:

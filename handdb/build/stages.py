@@ -21,7 +21,6 @@ import pyarrow as pa
 from handdb.build.options import BuildOptions
 from handdb.clip import Clip
 from handdb.errors import (
-    BoneLengthError,
     ClipDataError,
     HanddbError,
     InputError,
@@ -148,14 +147,10 @@ def ingest(entry: ClipEntry, content_hash: str | None = None) -> Clip:
 
 
 def resolve_bone_lengths(result: ClipResult, ratios: pa.Table | None) -> ClipResult:
-    """Give every bone of a 2D clip a length, or refuse the clip when none can be had."""
+    """Give every bone of a 2D clip a length, with its source and uncertainty."""
     if ratios is not None and ratios.num_rows == 0:
         ratios = None
-    try:
-        bones = clip_bone_lengths(result.clip, ratios)
-    except BoneLengthError as error:
-        raise ClipRefused(error, "bone_lengths") from None
-    return replace(result, bones=bones)
+    return replace(result, bones=clip_bone_lengths(result.clip, ratios))
 
 
 def fill(result: ClipResult, options: BuildOptions) -> ClipResult:

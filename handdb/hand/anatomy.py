@@ -15,7 +15,10 @@ named by role (:mod:`handdb.hand.skeletons`): ``cmc``, ``mcp``, ``pip``, ``dip``
 
 from __future__ import annotations
 
+from functools import cache
+
 import numpy as np
+import pyarrow.compute as pc
 
 from handdb.hand.skeletons import FINGERS, Skeleton
 
@@ -107,27 +110,68 @@ _THUMB_SPANS = (("cmc", "mcp"), ("mcp", "ip"), ("ip", "tip"))
 _FINGER_SPANS = (("cmc", "mcp"), ("mcp", "pip"), ("pip", "dip"), ("dip", "tip"))
 
 
-def _proportions() -> dict[tuple[str, str, str], float]:
-    """Buchholz's coefficients by bone, and the wrist-to-knuckle spans derived from them.
+@cache
+def xray_phalanx_ratios(finger: str) -> np.ndarray:
+    """Relative phalanx lengths of ``finger`` on each X-ray image of Chaudhry et al.
 
-    The paper gives no proportion for the span from the wrist to a finger's knuckle, which
-    skeletons such as MediaPipe's use as one bone: for the middle finger it is hand length
-    less its three phalanges; for the other fingers that span scaled by their metacarpal
-    over the middle metacarpal.
+    Read from the paper's Table 1, which handdb ships.
+
+    Returns
+    -------
+    (M, K) float64
+        Per image (rows, the paper's Figure 1a-1e), each phalanx's length over the
+        finger's total length, proximal to distal; rows sum to 1. Read-only.
+    """
+    from handdb.lengths.ratios import relative_lengths, table1_measurements
+
+    relative = relative_lengths(table1_measurements())
+    rows = relative.filter(pc.equal(relative.column("finger"), finger)).sort_by(
+        [("image_id", "ascending"), ("segment", "ascending")])
+    n_images = len(pc.unique(rows.column("image_id")))
+    ratios = rows.column("ratio").to_numpy().reshape(n_images, -1)
+    ratios.flags.writeable = False
+    return ratios
+
+
+@cache
+def segment_proportions(finger: str) -> tuple[float, ...]:
+    """The average hand's segments of ``finger`` as proportions of hand length.
+
+    The metacarpal and the phalanges' total are Buchholz's (:data:`BUCHHOLZ_1992`); the
+    total is split in the mean X-ray shares of Chaudhry et al.
+    (:func:`xray_phalanx_ratios`). Buchholz's own split ends the distal segment where the
+    bone ends; the X-ray shares put more of the finger into it, as annotations do that
+    mark the fingertip on the skin.
+
+    Returns
+    -------
+    tuple of float
+        Metacarpal, then the phalanges proximal to distal, as :data:`BUCHHOLZ_1992`.
+    """
+    metacarpal, *phalanges = BUCHHOLZ_1992[finger]
+    shares = xray_phalanx_ratios(finger).mean(axis=0)
+    return (metacarpal, *map(float, sum(phalanges) * shares / shares.sum()))
+
+
+@cache
+def _proportions() -> dict[tuple[str, str, str], float]:
+    """Every bone's proportion keyed by (finger, parent role, child role).
+
+    The segments are :func:`segment_proportions`. No proportion is published for the span
+    from the wrist to a finger's knuckle, which skeletons such as MediaPipe's use as one
+    bone: for the middle finger it is hand length less its three phalanges; for the other
+    fingers that span scaled by their metacarpal over the middle metacarpal.
     """
     table = {}
-    for finger, coefficients in BUCHHOLZ_1992.items():
+    for finger in FINGERS:
         spans = _THUMB_SPANS if finger == "thumb" else _FINGER_SPANS
-        table.update({(finger, *span): c for span, c in zip(spans, coefficients, strict=True)})
+        table.update({(finger, *span): c for span, c in
+                      zip(spans, segment_proportions(finger), strict=True)})
     wrist_to_middle_knuckle = 1.0 - sum(BUCHHOLZ_1992["middle"][1:])
     for finger in FINGERS[1:]:
         scale = BUCHHOLZ_1992[finger][0] / BUCHHOLZ_1992["middle"][0]
         table[(finger, "wrist", "mcp")] = wrist_to_middle_knuckle * scale
     return table
-
-
-#: Bone length / hand length keyed by (finger, parent role, child role).
-HAND_LENGTH_PROPORTIONS: dict[tuple[str, str, str], float] = _proportions()
 
 
 def hand_length_proportions(skeleton: Skeleton) -> np.ndarray:
@@ -139,8 +183,9 @@ def hand_length_proportions(skeleton: Skeleton) -> np.ndarray:
         ``(J,) float64``, dimensionless; NaN for the root and for bones without a
         published proportion (wrist to thumb base, palm centre, palm fold).
     """
+    proportions = _proportions()
     return np.array([
-        np.nan if parent < 0 else HAND_LENGTH_PROPORTIONS.get(
+        np.nan if parent < 0 else proportions.get(
             (finger, skeleton.roles[parent], role), np.nan)
         for parent, finger, role in zip(skeleton.parents, skeleton.fingers, skeleton.roles,
                                         strict=True)

@@ -13,10 +13,7 @@ so the split stays within the X-ray minimum and maximum.
 
 from __future__ import annotations
 
-from functools import cache
-
 import numpy as np
-import pyarrow.compute as pc
 
 from handdb.hand import anatomy
 from handdb.hand.shape import HandShape, shape_from_layout
@@ -66,25 +63,6 @@ WRIST_POINT_RANGE = ((-0.03, 0.03), (-0.06, 0.06), (-0.03, 0.05))
 KNUCKLE_HEIGHT_SPREAD = 0.015
 
 
-@cache
-def xray_phalanx_ratios(finger: str) -> np.ndarray:
-    """Relative phalanx lengths of ``finger`` on each X-ray image of Chaudhry et al.
-
-    Returns
-    -------
-    (M, K) float64
-        Per image (rows, the paper's Figure 1a-1e), each phalanx's length over the
-        finger's total length, proximal to distal; rows sum to 1.
-    """
-    from handdb.lengths.ratios import relative_lengths, table1_measurements
-
-    relative = relative_lengths(table1_measurements())
-    rows = relative.filter(pc.equal(relative.column("finger"), finger)).sort_by(
-        [("image_id", "ascending"), ("segment", "ascending")])
-    n_images = len(pc.unique(rows.column("image_id")))
-    return rows.column("ratio").to_numpy().reshape(n_images, -1)
-
-
 def _normal(rng: np.random.Generator, sigma: float) -> float:
     return float(sigma * np.clip(rng.standard_normal(), -CLIP_SIGMA, CLIP_SIGMA))
 
@@ -121,7 +99,7 @@ def sample_shape(rng: np.random.Generator, hand_length_mm: float | None = None) 
         coefficients = proportions[finger]
         metacarpal[finger] = length * coefficients[0] * (1.0 + _normal(rng, LENGTH_SPREAD))
         total = length * sum(coefficients[1:]) * (1.0 + _normal(rng, LENGTH_SPREAD))
-        observed = xray_phalanx_ratios(finger)
+        observed = anatomy.xray_phalanx_ratios(finger)
         weights = rng.dirichlet(np.full(len(observed), XRAY_MIXTURE_CONCENTRATION))
         phalanges[finger] = total * (weights @ observed)
         x, y, z = anatomy.CMC_POSITION[finger]

@@ -189,10 +189,14 @@ def shape_from_layout(metacarpal_mm: Mapping[str, float], phalanges_mm: Mapping[
 
 
 def mean_shape(hand_length_mm: float = anatomy.MEAN_HAND_LENGTH_MM) -> HandShape:
-    """The average adult right hand (Buchholz et al. 1992 proportions), in millimetres."""
+    """The average adult right hand, in millimetres.
+
+    Its segments are :func:`handdb.hand.anatomy.segment_proportions` of its length, its
+    palm the mean palm of :mod:`handdb.hand.anatomy`.
+    """
     if not np.isfinite(hand_length_mm) or hand_length_mm <= 0:
         raise ParameterError(f"hand_length_mm must be a positive number, got {hand_length_mm}")
-    proportions = anatomy.BUCHHOLZ_1992
+    proportions = {finger: anatomy.segment_proportions(finger) for finger in FINGERS}
     return shape_from_layout(
         metacarpal_mm={f: hand_length_mm * c[0] for f, c in proportions.items()},
         phalanges_mm={f: hand_length_mm * np.array(c[1:]) for f, c in proportions.items()},

@@ -38,7 +38,7 @@ CLIP_ID_PATTERN = re.compile(r"^[A-Za-z0-9][A-Za-z0-9._-]{0,127}$")
 
 PINHOLE_KEYS = ("fx", "fy", "cx", "cy")
 KNOWN_KEYS = frozenset({
-    "skeleton", "hand", "fps", "subject", "units", "camera", "bone_lengths",
+    "skeleton", "hand", "fps", "subject", "units", "camera", "bone_lengths", "hand_length",
     "min_confidence", "joint_map", "image", "gap_fill", "lift",
 })
 
@@ -160,6 +160,8 @@ def parse_sidecar_text(text: str, path: str, clip_id: str, *,
         bone_lengths[joint] = _number({f"bone_lengths.{joint}": length},
                                       f"bone_lengths.{joint}", path)
 
+    hand_length = _number(doc, "hand_length", path) if "hand_length" in doc else None
+
     min_conf = DEFAULT_MIN_CONFIDENCE
     if "min_confidence" in doc:
         min_conf = _number(doc, "min_confidence", path, positive=False)
@@ -201,6 +203,7 @@ def parse_sidecar_text(text: str, path: str, clip_id: str, *,
         units=units,
         camera=_camera(doc["camera"], path) if "camera" in doc else Camera(model=NO_CAMERA),
         bone_lengths=bone_lengths,
+        hand_length=hand_length,
         min_confidence=min_conf,
         joint_map={str(k): str(v) for k, v in joint_map.items()},
         image_width=width,

@@ -1,31 +1,33 @@
-"""The length of every bone of a clip, and where it came from.
+"""The length of every bone of a clip, where it came from, and how sure it is.
 
-Depth reconstruction needs every bone's length in the clip's units. Each bone takes its
-length from the first of these sources that gives one (most direct measurement first,
-population statistics last):
+Depth reconstruction needs every bone's length in the clip's units. A bone's length comes
+from the first of these sources that measures it:
 
-1. ``given``: the sidecar's ``bone_lengths``, what the user measured on the subject.
+1. ``given``: the sidecar's ``bone_lengths``, what the user measured on the subject;
 2. ``truth``: the median over frames of the bone's length in the ground-truth 3D
-   positions, robust to frames where a joint jumps.
+   positions, robust to frames where a joint jumps;
 3. ``calibrated``: subject calibration of a marker clip's fit
-   (:func:`handdb.markers.calibration.calibrate`).
-4. ``reference_frame``: the thesis's reference hand (Nopvichai 2009, section 3.2): in the
-   frame where the hand is most stretched in 2D, taken to be flat and facing the camera,
-   2D lengths are proportional to 3D lengths (orthographic projection; a pinhole camera
-   too, the hand lying at one depth), so one known length gives the scale of the rest.
-5. ``ratios``: a finger's phalanges from one or more of its known phalanges and the
-   X-ray relative lengths of Chaudhry et al. (:mod:`handdb.lengths.ratios`).
-6. ``anthropometric``: bones as proportions of hand length (Buchholz et al. 1992,
-   :mod:`handdb.hand.anatomy`), the hand length estimated from the bones known so far.
+   (:func:`handdb.markers.calibration.calibrate`);
 
-Sources 4-6 only scale what 1-3 give: a clip with no given lengths, no ground truth and
-no markers has no length scale at all and raises :class:`BoneLengthError`; so does a
-clip left with a bone no source can give.
+and the other bones are estimated (:mod:`handdb.lengths.estimate`), combining by their
+spreads what each kind of evidence says:
+
+4. ``clip``: the clip's own images, each bone's least-foreshortened appearances over all
+   its frames, scaled by the known bones (with the X-ray and population priors below);
+5. ``ratios``: a finger's phalanges from its known phalanges and the X-ray proportions of
+   Chaudhry et al. (:mod:`handdb.lengths.ratios`), where the images say nothing;
+6. ``proportions``: every bone a share of the hand's length (Buchholz et al. 1992 and the
+   average hand's layout), the hand's length given by the known bones or by the sidecar's
+   ``hand_length``;
+7. ``population``: the same for an average adult hand, when the sidecar gives no length
+   at all: the clip is then as large as an average hand, within the population's spread.
+
+Every estimated length has an uncertainty (one standard deviation, clip units) in the
+``bone_lengths`` table.
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -33,28 +35,42 @@ import numpy as np
 import pyarrow as pa
 
 from handdb.clip import Clip
-from handdb.errors import BoneLengthError
-from handdb.hand.anatomy import hand_length_proportions
 from handdb.hand.skeletons import Skeleton, frame_bone_lengths
+from handdb.lengths.estimate import (
+    Estimate,
+    combine,
+    hand_length_from,
+    image_proportions,
+    population_hand_length,
+    proportion_lengths,
+    ratio_lengths,
+    sized_like,
+)
 from handdb.lengths.ratios import bone_ratios, joint_ratios, table1_measurements
 from handdb.store import tables
 
-#: Every source of a bone length, in order of precedence.
+#: Every source of a bone length, most direct first.
 SOURCES: tuple[str, ...] = (
-    "given", "truth", "calibrated", "reference_frame", "ratios", "anthropometric",
+    "given", "truth", "calibrated", "clip", "ratios", "proportions", "population",
 )
+
+#: Robust standard deviation of a median absolute deviation.
+MAD_TO_SIGMA = 1.4826
+
+#: Relative spread of a hand length the sidecar gives (a tape measure's).
+GIVEN_HAND_LENGTH_SPREAD = 0.02
 
 
 @dataclass(frozen=True)
 class BoneLengths:
-    """Every bone of a skeleton with its length and where that came from.
+    """Every bone of a skeleton with its length, where that came from and its uncertainty.
 
     Attributes
     ----------
     skeleton
         The skeleton; arrays follow its joint order, a bone named by its child joint.
     units
-        Length unit of ``lengths`` and ``residuals``.
+        Length unit of ``lengths``, ``uncertainty`` and ``residuals``.
     lengths
         ``(J,) float64``: length of the bone ending at each joint; NaN for the root.
     sources
@@ -67,6 +83,9 @@ class BoneLengths:
         per-frame length from the estimate), NaN where not calibrated.
     n_frames
         ``(J,) int64``: frames the length was measured over, 0 where not measured.
+    uncertainty
+        ``(J,) float64``: one standard deviation of the length, ``units``; NaN where the
+        length is given.
     """
 
     skeleton: Skeleton
@@ -76,150 +95,37 @@ class BoneLengths:
     details: tuple[str | None, ...]
     residuals: np.ndarray
     n_frames: np.ndarray
+    uncertainty: np.ndarray
 
 
-def most_stretched_frame(uv: np.ndarray, skeleton: Skeleton) -> int:
-    """Pick the reference frame: the one showing the hand most stretched in 2D.
-
-    Among the frames in which the most bones are seen, the one whose 2D bones are
-    longest in total.
-
-    Parameters
-    ----------
-    uv
-        ``(T, J, 2) float64`` image positions, pixels; NaN where not observed.
-    skeleton
-        The skeleton of the joint axis.
-
-    Returns
-    -------
-    int
-        Index of the frame.
-    """
-    lengths = frame_bone_lengths(uv, skeleton)
-    seen = np.isfinite(lengths).sum(axis=1)
-    total = np.where(seen == seen.max(), np.nansum(lengths, axis=1), -np.inf)
-    return int(np.argmax(total))
+def _hand_length(clip: Clip, known: np.ndarray) -> tuple[float, float, str]:
+    """The clip's hand length, its relative spread, and where it came from."""
+    spec = clip.spec
+    if spec.hand_length is not None:
+        return spec.hand_length, GIVEN_HAND_LENGTH_SPREAD, "hand_length"
+    length, spread = hand_length_from(clip.skeleton, known)
+    if np.isfinite(length):
+        return length, spread, "known"
+    length, spread = population_hand_length(spec.meters_per_unit * 1000.0)
+    return length, spread, "population"
 
 
-def scale_reference_frame(uv_frame: np.ndarray, skeleton: Skeleton,
-                          known: np.ndarray) -> tuple[np.ndarray, float]:
-    """Lengths of the bones seen in a reference frame, scaled by the known lengths.
-
-    Parameters
-    ----------
-    uv_frame
-        ``(J, 2) float64`` image positions in the reference frame, pixels; NaN where
-        not observed.
-    skeleton
-        The skeleton of the joint axis.
-    known
-        ``(J,) float64`` lengths known so far, clip units; NaN where unknown.
-
-    Returns
-    -------
-    lengths
-        ``(J,) float64``, clip units: each bone seen in the frame, NaN elsewhere (all
-        NaN when no known bone is seen).
-    scale
-        Clip units per pixel: the median over the known bones seen of known length
-        over 2D length; NaN when there is none.
-    """
-    pixels = frame_bone_lengths(uv_frame[None], skeleton)[0]
-    anchors = np.isfinite(known) & (pixels > 0)
-    if not anchors.any():
-        return np.full(skeleton.n_joints, np.nan), np.nan
-    scale = float(np.median(known[anchors] / pixels[anchors]))
-    return pixels * scale, scale
-
-
-def lengths_from_ratios(skeleton: Skeleton, known: np.ndarray,
-                        mean_ratio: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Phalanges from the known phalanges of their finger and the X-ray ratios.
-
-    Each known phalanx ``k`` of a finger estimates the finger's total length as
-    ``known_k / ratio_k``; their mean times each ratio gives every phalanx.
-
-    Parameters
-    ----------
-    skeleton
-        The skeleton of the joint axis.
-    known
-        ``(J,) float64`` lengths known so far; NaN where unknown.
-    mean_ratio
-        ``(J,) float64`` mean relative length of each phalanx in its finger
-        (:func:`handdb.lengths.ratios.bone_ratios`); NaN for other bones.
-
-    Returns
-    -------
-    lengths
-        ``(J,) float64``: every phalanx of a finger with a known phalanx; NaN elsewhere.
-    finger_total
-        ``(J,) float64``: the estimated total length of the finger of each such bone.
-    """
-    fingers = np.array(skeleton.fingers)
-    anchors = np.isfinite(known) & np.isfinite(mean_ratio)
-    same_finger = fingers[:, None] == fingers[None, :]
-    votes = same_finger & anchors[None, :]
-    estimates = np.where(anchors, known / np.where(anchors, mean_ratio, 1.0), 0.0)
-    with np.errstate(invalid="ignore"):
-        finger_total = (votes @ estimates) / votes.sum(axis=1)
-    return finger_total * mean_ratio, finger_total
-
-
-def lengths_from_hand_length(skeleton: Skeleton,
-                             known: np.ndarray) -> tuple[np.ndarray, float]:
-    """Bones as published proportions of a hand length estimated from the known bones.
-
-    Parameters
-    ----------
-    skeleton
-        The skeleton of the joint axis.
-    known
-        ``(J,) float64`` lengths known so far; NaN where unknown.
-
-    Returns
-    -------
-    lengths
-        ``(J,) float64``: every bone with a proportion; all NaN when no known bone has one.
-    hand_length
-        The median over known bones of length over proportion; NaN when none.
-    """
-    proportion = hand_length_proportions(skeleton)
-    anchors = np.isfinite(known) & np.isfinite(proportion)
-    if not anchors.any():
-        return np.full(skeleton.n_joints, np.nan), np.nan
-    hand_length = float(np.median(known[anchors] / proportion[anchors]))
-    return proportion * hand_length, hand_length
-
-
-class _Ledger:
-    """The lengths found so far for one skeleton; each bone keeps its first source."""
-
-    def __init__(self, skeleton: Skeleton) -> None:
-        self.skeleton = skeleton
-        self.lengths = np.full(skeleton.n_joints, np.nan)
-        self.sources: list[str | None] = [None] * skeleton.n_joints
-        self.details: list[str | None] = [None] * skeleton.n_joints
-        self.residuals = np.full(skeleton.n_joints, np.nan)
-        self.n_frames = np.zeros(skeleton.n_joints, dtype=np.int64)
-
-    def missing(self) -> np.ndarray:
-        """``(J,) bool``: the bones still without a length."""
-        return np.isnan(self.lengths) & (self.skeleton.parents >= 0)
-
-    def add(self, source: str, lengths: np.ndarray, detail: Callable[[int], str], *,
-            residuals: np.ndarray | None = None, n_frames: np.ndarray | None = None) -> None:
-        """Take ``lengths`` (``(J,)``, NaN where none) for the bones still missing."""
-        new = self.missing() & np.isfinite(lengths) & (lengths > 0)
-        for j in np.flatnonzero(new):
-            self.lengths[j] = lengths[j]
-            self.sources[j] = source
-            self.details[j] = detail(int(j))
-            if residuals is not None:
-                self.residuals[j] = residuals[j]
-            if n_frames is not None:
-                self.n_frames[j] = n_frames[j]
+def _truth(clip: Clip) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Median length of every bone in the ground truth, its spread and its frames."""
+    skeleton = clip.skeleton
+    n = skeleton.n_joints
+    median, spread, frames = np.full(n, np.nan), np.full(n, np.nan), np.zeros(n, np.int64)
+    if clip.truth is None:
+        return median, spread, frames
+    per_frame = frame_bone_lengths(clip.truth, skeleton)
+    for j in skeleton.bones[:, 1]:
+        values = per_frame[np.isfinite(per_frame[:, j]), j]
+        if len(values):
+            median[j] = np.median(values)
+            spread[j] = MAD_TO_SIGMA * np.median(np.abs(values - median[j])) / np.sqrt(
+                len(values))
+            frames[j] = len(values)
+    return median, spread, frames
 
 
 def clip_bone_lengths(clip: Clip, ratios: pa.Table | None = None) -> BoneLengths:
@@ -228,7 +134,8 @@ def clip_bone_lengths(clip: Clip, ratios: pa.Table | None = None) -> BoneLengths
     Parameters
     ----------
     clip
-        The clip: its sidecar's ``bone_lengths``, its ``truth`` and its 2D tracks.
+        The clip: its sidecar's ``bone_lengths`` and ``hand_length``, its ``truth`` and
+        its 2D tracks.
     ratios
         Table ``joint_ratios`` (cohort ``all`` is used); ``None`` or an empty table uses
         the paper's Table 1.
@@ -238,61 +145,68 @@ def clip_bone_lengths(clip: Clip, ratios: pa.Table | None = None) -> BoneLengths
     BoneLengths
         In the clip's units.
 
-    Raises
-    ------
-    BoneLengthError
-        When the clip has no length scale (no given lengths, no truth, no markers), or
-        some bone can be had from no source; the message names the bones and the fix.
+    Every bone gets a length: the average hand's layout gives one to any bone of a
+    skeleton preset.
     """
     skeleton, spec = clip.skeleton, clip.spec
     if ratios is None or ratios.num_rows == 0:
         ratios = joint_ratios(table1_measurements())
-    ledger = _Ledger(skeleton)
-
-    given = np.array([spec.bone_lengths.get(j, np.nan) for j in skeleton.joints])
+    n = skeleton.n_joints
     sidecar = Path(spec.path).name
-    ledger.add("given", given, lambda j: f"bone_lengths in {sidecar}")
-    if clip.truth is not None:
-        per_frame = frame_bone_lengths(clip.truth, skeleton)
-        n_frames = np.isfinite(per_frame).sum(axis=0)
-        seen = n_frames > 0
-        median = np.full(skeleton.n_joints, np.nan)
-        median[seen] = np.nanmedian(per_frame[:, seen], axis=0)
-        ledger.add("truth", median, lambda j: f"median over {n_frames[j]} frames of the "
-                   "ground truth", n_frames=n_frames)
-    if not np.isfinite(ledger.lengths).any():
-        raise BoneLengthError(
-            f"clip '{clip.clip_id}': no bone length to scale the hand by: the sidecar "
-            "gives no bone_lengths, and the clip has no ground truth and no 3D markers; "
-            f"add at least one bone's length (e.g. \"index_pip\") to bone_lengths in "
-            f"{spec.path}")
+    given = np.array([spec.bone_lengths.get(j, np.nan) for j in skeleton.joints])
+    truth, truth_spread, truth_frames = _truth(clip)
+    lengths = np.where(np.isfinite(given), given, truth)
+    uncertainty = np.where(np.isfinite(given), np.nan, truth_spread)
+    sources: list[str | None] = [None] * n
+    details: list[str | None] = [None] * n
+    for j in skeleton.bones[:, 1]:
+        if np.isfinite(given[j]):
+            sources[j], details[j] = "given", f"bone_lengths in {sidecar}"
+        elif np.isfinite(truth[j]):
+            sources[j] = "truth"
+            details[j] = f"median over {truth_frames[j]} frames of the ground truth"
 
+    hand_length, hand_spread, hand_origin = _hand_length(clip, lengths)
+    proportions = proportion_lengths(skeleton, hand_length, hand_spread)
     uv = np.where(clip.observed[..., None], clip.uv, np.nan)
-    frame = most_stretched_frame(uv, skeleton)
-    scaled, scale = scale_reference_frame(uv[frame], skeleton, ledger.lengths)
-    ledger.add("reference_frame", scaled, lambda j: f"frame {frame}, 2D length x "
-               f"{scale:.6g} {spec.units}/pixel from the known bones seen in it")
-
+    shape = image_proportions(uv, skeleton, proportions.lengths)
+    if np.isfinite(lengths).any():
+        images = sized_like(shape, Estimate(lengths, np.zeros(n), truth_frames))
+    else:
+        images = sized_like(shape, proportion_lengths(skeleton, hand_length), hand_spread)
     mean_ratio, _ = bone_ratios(skeleton, ratios)
-    by_ratio, finger_total = lengths_from_ratios(skeleton, ledger.lengths, mean_ratio)
-    ledger.add("ratios", by_ratio, lambda j: f"X-ray ratio {mean_ratio[j]:.4f} of a "
-               f"{skeleton.fingers[j]} finger of {finger_total[j]:.6g} {spec.units}")
-
-    by_proportion, hand_length = lengths_from_hand_length(skeleton, ledger.lengths)
-    ledger.add("anthropometric", by_proportion, lambda j: "Buchholz et al. 1992 proportion "
-               f"of a hand length of {hand_length:.6g} {spec.units}")
-
-    missing = [skeleton.joints[j] for j in np.flatnonzero(ledger.missing())]
-    if missing:
-        raise BoneLengthError(
-            f"clip '{clip.clip_id}': no length for bone(s) {', '.join(missing)}: not given, "
-            "not in the ground truth, not seen in the reference frame, and not a phalanx "
-            f"or bone with a published proportion; add them to bone_lengths in {spec.path}")
-    return BoneLengths(
-        skeleton=skeleton, units=spec.units, lengths=ledger.lengths,
-        sources=tuple(ledger.sources), details=tuple(ledger.details),
-        residuals=ledger.residuals, n_frames=ledger.n_frames,
-    )
+    phalanges = ratio_lengths(skeleton, np.where(np.isfinite(lengths), lengths,
+                                                 images.lengths), mean_ratio)
+    estimate = combine([images, proportions, phalanges])
+    for j in skeleton.bones[:, 1]:
+        if sources[j] is not None or not np.isfinite(estimate.lengths[j]):
+            continue
+        lengths[j] = estimate.lengths[j]
+        uncertainty[j] = estimate.spread[j] * estimate.lengths[j]
+        if np.isfinite(images.lengths[j]):
+            sources[j] = "clip"
+            details[j] = (f"upper envelope over {images.n_frames[j]} frames of its image "
+                          "length, scaled by the known bones, with the X-ray and hand "
+                          "proportions as priors")
+        elif np.isfinite(phalanges.lengths[j]):
+            sources[j] = "ratios"
+            details[j] = ("X-ray share of its finger's other phalanges, with the hand's "
+                          "proportions")
+        else:
+            sources[j] = "population" if hand_origin == "population" else "proportions"
+            details[j] = {
+                "hand_length": f"its share of the hand_length in {sidecar}",
+                "known": f"its share of a {hand_length:.4g} {spec.units} hand, from the "
+                         "known bones",
+                "population": f"its share of an average adult hand ({hand_length:.4g} "
+                              f"{spec.units}): {sidecar} gives no length",
+            }[hand_origin]
+    n_frames = np.where(np.array([s == "truth" for s in sources]), truth_frames,
+                        np.where(np.array([s == "clip" for s in sources]), images.n_frames, 0))
+    return BoneLengths(skeleton=skeleton, units=spec.units, lengths=lengths,
+                       sources=tuple(sources), details=tuple(details),
+                       residuals=np.full(n, np.nan), n_frames=n_frames.astype(np.int64),
+                       uncertainty=uncertainty)
 
 
 def bone_lengths_table(clip_id: str, subject: str, skeleton: Skeleton,
@@ -320,6 +234,7 @@ def bone_lengths_table(clip_id: str, subject: str, skeleton: Skeleton,
         "units": bone_lengths.units,
         "source": [bone_lengths.sources[c] for c in child],
         "detail": [bone_lengths.details[c] for c in child],
+        "uncertainty": pa.array(bone_lengths.uncertainty[child], from_pandas=True),
         "residual": pa.array(bone_lengths.residuals[child], from_pandas=True),
         "n_frames": pa.array(n_frames, mask=n_frames == 0),
     })

@@ -291,4 +291,5 @@ def calibrated_bone_lengths(calibration: Calibration, units: str) -> BoneLengths
                for j in range(skeleton.n_joints)]
     details = [None if source is None else detail for source in sources]
     return BoneLengths(skeleton=skeleton, units=units, lengths=lengths, sources=tuple(sources),
-                       details=tuple(details), residuals=residuals, n_frames=n_frames)
+                       details=tuple(details), residuals=residuals, n_frames=n_frames,
+                       uncertainty=np.full(skeleton.n_joints, np.nan))

@@ -174,13 +174,14 @@ def fitted_bone_lengths(fit: MarkerFit, spec: ClipSpec) -> BoneLengths:
     lengths[skeleton.bones[:, 1]] = fit.model.bone_lengths / (METERS_PER_UNIT[spec.units]
                                                                * 1000.0)
     given = [j in spec.bone_lengths for j in skeleton.joints]
-    sources = tuple(None if j == skeleton.root else "given" if g else "anthropometric"
+    sources = tuple(None if j == skeleton.root else "given" if g else "proportions"
                     for j, g in enumerate(given))
     details = tuple(None if j == skeleton.root else f"bone_lengths in {spec.path}" if g
                     else "the hand model's template" for j, g in enumerate(given))
     return BoneLengths(skeleton=skeleton, units=spec.units, lengths=lengths, sources=sources,
                        details=details, residuals=np.full(skeleton.n_joints, np.nan),
-                       n_frames=np.zeros(skeleton.n_joints, dtype=np.int64))
+                       n_frames=np.zeros(skeleton.n_joints, dtype=np.int64),
+                       uncertainty=np.full(skeleton.n_joints, np.nan))
 
 
 def fit_positions(fit: MarkerFit) -> LiftResult:

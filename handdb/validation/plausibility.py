@@ -30,7 +30,6 @@ import numpy as np
 
 from handdb.clip import METERS_PER_UNIT
 from handdb.hand import anatomy
-from handdb.hand.population import xray_phalanx_ratios
 from handdb.hand.skeletons import FINGERS, Skeleton
 
 #: Hand lengths (distal wrist crease to the middle fingertip) the gate admits, mm: from a
@@ -149,7 +148,7 @@ def check_bone_lengths(skeleton: Skeleton, lengths: np.ndarray, units: str
         if chain is None or not np.all(np.isfinite(mm[chain])):
             continue
         share = mm[chain] / mm[chain].sum()
-        observed = xray_phalanx_ratios(finger)
+        observed = anatomy.xray_phalanx_ratios(finger)
         low = observed.min(axis=0) * (1.0 - SHARE_TOLERANCE)
         high = observed.max(axis=0) * (1.0 + SHARE_TOLERANCE)
         wrong = (share < low) | (share > high)

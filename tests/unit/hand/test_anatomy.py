@@ -25,10 +25,12 @@ def test_clinical_norms_are_the_ones_kept():
     assert anatomy.DIP_PIP_COUPLING == pytest.approx(2.0 / 3.0)
 
 
-def test_hand_length_proportions_follow_buchholz_and_leave_unknown_bones_out():
+def test_hand_length_proportions_follow_the_mean_hand_and_leave_unknown_bones_out():
     skeleton = load_skeleton("mediapipe21")
     proportions = anatomy.hand_length_proportions(skeleton)
-    assert proportions[skeleton.index("index_pip")] == anatomy.BUCHHOLZ_1992["index"][1]
+    index = [skeleton.index(f"index_{j}") for j in ("pip", "dip", "tip")]
+    assert proportions[index] == pytest.approx(anatomy.segment_proportions("index")[1:])
+    assert proportions[index].sum() == pytest.approx(sum(anatomy.BUCHHOLZ_1992["index"][1:]))
     assert np.isnan(proportions[skeleton.index("thumb_cmc")])
     assert np.isnan(proportions[skeleton.root])
     middle = [skeleton.index(f"middle_{j}") for j in ("mcp", "pip", "dip", "tip")]

@@ -3,13 +3,8 @@
 import numpy as np
 import pytest
 
-from handdb.hand.anatomy import BUCHHOLZ_1992
-from handdb.hand.population import (
-    HAND_LENGTH_MM,
-    THUMB_BASE_HEIGHT_RANGE,
-    sample_shape,
-    xray_phalanx_ratios,
-)
+from handdb.hand.anatomy import BUCHHOLZ_1992, xray_phalanx_ratios
+from handdb.hand.population import HAND_LENGTH_MM, THUMB_BASE_HEIGHT_RANGE, sample_shape
 from handdb.hand.skeletons import FINGERS, load_skeleton
 
 #: Tolerance on a drawn phalanx ratio beyond the X-ray range: ratios are convex mixtures of

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from handdb.errors import SkeletonError
-from handdb.hand.anatomy import BUCHHOLZ_1992
+from handdb.hand.anatomy import BUCHHOLZ_1992, xray_phalanx_ratios
 from handdb.hand.shape import mean_shape
 from handdb.hand.skeletons import FINGERS, load_skeleton
 
@@ -16,15 +16,20 @@ def test_the_mean_hand_has_the_length_asked_for(length):
     assert mean_shape(length).hand_length == pytest.approx(length, rel=0.01)
 
 
-def test_the_mean_hand_has_buchholz_proportions():
+def test_the_mean_hand_has_buchholz_lengths_split_in_the_xray_shares():
     shape = mean_shape(200.0)
     skeleton = load_skeleton("mediapipe21")
     lengths = shape.bone_lengths(skeleton)
-    for finger in FINGERS[1:]:
-        chain = [skeleton.index(f"{finger}_{j}") for j in ("pip", "dip", "tip")]
-        np.testing.assert_allclose(lengths[chain] / 200.0, BUCHHOLZ_1992[finger][1:])
-    thumb = [skeleton.index(f"thumb_{j}") for j in ("mcp", "ip", "tip")]
-    np.testing.assert_allclose(lengths[thumb] / 200.0, BUCHHOLZ_1992["thumb"])
+    for finger in FINGERS:
+        ends = ("mcp", "ip", "tip") if finger == "thumb" else ("mcp", "pip", "dip", "tip")
+        chain = [skeleton.index(f"{finger}_{j}") for j in ends]
+        metacarpal, *phalanges = BUCHHOLZ_1992[finger]
+        if finger == "thumb":
+            assert lengths[chain[0]] / 200.0 == pytest.approx(metacarpal)
+        assert lengths[chain[1:]].sum() / 200.0 == pytest.approx(sum(phalanges))
+        shares = lengths[chain[1:]] / lengths[chain[1:]].sum()
+        np.testing.assert_allclose(shares, xray_phalanx_ratios(finger).mean(axis=0),
+                                   atol=1e-9)
 
 
 def test_the_mean_hand_faces_the_frame_thumb_radial_thumb_base_palmar():

@@ -1,23 +1,25 @@
+"""Every bone of a clip gets a length, from what is known and from the whole clip."""
+
+import json
+from dataclasses import replace
+
 import numpy as np
 import pyarrow.compute as pc
 import pytest
 
-from handdb.errors import BoneLengthError
-from handdb.hand.anatomy import BUCHHOLZ_1992, hand_length_proportions
+from handdb.hand.anatomy import hand_length_proportions
 from handdb.hand.skeletons import load_skeleton
-from handdb.lengths.bone_lengths import (
-    SOURCES,
-    bone_lengths_table,
-    clip_bone_lengths,
-    lengths_from_ratios,
-    most_stretched_frame,
-)
+from handdb.lengths.bone_lengths import SOURCES, bone_lengths_table, clip_bone_lengths
+from handdb.lengths.estimate import ratio_lengths, reference_frame_lengths
 from handdb.lengths.ratios import bone_ratios, joint_ratios, table1_measurements
 from handdb.store.tables import empty, schema
+from handdb.synthetic import synthesize_clip
 
-#: Curl per frame (radians); frame 3 shows the flat, stretched hand.
+#: Curl per frame (radians) of the short clip; frame 3 shows the flat, stretched hand.
 CURL = np.array([0.9, 0.6, 0.3, 0.0, 0.4, 1.2])
-FLAT_FRAME = 3
+
+#: A longer motion: the fingers curl and open again, the flat hand now and then.
+LONG_CURL = np.abs(np.sin(np.linspace(0.0, 3.0 * np.pi, 90))) * 1.1
 
 
 @pytest.fixture(scope="module")
@@ -25,110 +27,141 @@ def ratios():
     return joint_ratios(table1_measurements())
 
 
-def test_reference_frame_gives_every_bone_from_one_length(make_clip, hand):
-    clip = make_clip(CURL, bone_lengths={"index_pip": 49.0})
-    truth = hand.true_lengths(clip.skeleton)
-    assert most_stretched_frame(clip.uv, clip.skeleton) == FLAT_FRAME
+def relative_errors(result, truth, bones):
+    return np.abs(result.lengths[bones] - truth[bones]) / truth[bones]
+
+
+def test_one_known_length_gives_every_bone_from_the_whole_clip(make_clip, hand):
+    clip = make_clip(LONG_CURL, bone_lengths={"index_pip": 49.0})
+    truth = hand.true_lengths(clip.skeleton) * 49.0 / hand.true_lengths(clip.skeleton)[6]
     result = clip_bone_lengths(clip)
-    sources = dict(zip(clip.skeleton.joints, result.sources, strict=True))
-    assert sources["index_pip"] == "given" and result.lengths[6] == 49.0
-    others = [j for j, s in enumerate(result.sources) if s == "reference_frame"]
-    assert len(others) == clip.skeleton.n_joints - 2
-    # index_pip is given as 49.0 mm where the synthetic hand has 49.0 mm within 0.1 %.
-    expected = truth[others] * 49.0 / truth[6]
-    np.testing.assert_allclose(result.lengths[others], expected, rtol=1e-9)
-    assert np.isnan(result.lengths[clip.skeleton.root])
+    assert result.sources[6] == "given" and result.lengths[6] == 49.0
+    estimated = [j for j, s in enumerate(result.sources) if s == "clip"]
+    assert len(estimated) == clip.skeleton.n_joints - 2
+    assert relative_errors(result, truth, estimated).max() < 0.05
+    assert np.all(result.uncertainty[estimated] > 0)
+    assert np.isnan(result.uncertainty[6]) and np.isnan(result.lengths[clip.skeleton.root])
 
 
-def test_truth_beats_the_reference_frame_and_given_beats_truth(make_clip, hand):
+def test_the_whole_clip_beats_one_frame_assumed_flat():
+    # hands of the population before a pinhole camera, with a tracker's pixel noise: no
+    # frame is exactly flat and facing the camera, as in real clips
+    errors = {"clip": [], "reference frame": []}
+    for seed, motion in enumerate(["random", "wave", "random", "wave"]):
+        synthetic = synthesize_clip(motion, 300, seed=seed, camera="pinhole", noise_px=1.0)
+        clip = synthetic.as_clip("s")
+        skeleton = clip.skeleton
+        truth = np.array([synthetic.bone_lengths.get(j, np.nan) for j in skeleton.joints])
+        known = {"index_pip": float(truth[skeleton.index("index_pip")])}
+        clip = replace(clip, truth=None, spec=replace(clip.spec, bone_lengths=known))
+        unknown = [j for j in skeleton.bones[:, 1] if skeleton.joints[j] not in known]
+        lengths = clip_bone_lengths(clip).lengths
+        given = np.array([known.get(j, np.nan) for j in skeleton.joints])
+        reference = reference_frame_lengths(clip.uv, skeleton, given)
+        errors["clip"].append(np.abs(lengths - truth)[unknown])
+        errors["reference frame"].append(np.abs(reference - truth)[unknown])
+    assert np.mean(errors["clip"]) < np.nanmean(errors["reference frame"])
+
+
+def test_a_clip_with_no_length_gets_an_average_hand_with_its_spread(make_clip, hand):
+    clip = make_clip(LONG_CURL)
+    result = clip_bone_lengths(clip)
+    assert set(result.sources) - {None} <= {"clip", "population"}
+    skeleton = clip.skeleton
+    bones = skeleton.bones[:, 1]
+    truth = hand.true_lengths(skeleton)
+    # the hand's proportions come from the images, its size from the population (+-6 %)
+    ratio = result.lengths[bones] / truth[bones]
+    assert np.std(ratio) < 0.05 and abs(np.median(ratio) - 1.0) < 0.1
+    assert np.all(result.uncertainty[bones] / result.lengths[bones] > 0.05)
+
+
+def test_a_given_hand_length_sizes_the_hand(make_clip, hand, tmp_path):
+    clip = make_clip(LONG_CURL)
+    spec = replace(clip.spec, hand_length=2.0 * hand.hand_length_mm)
+    result = clip_bone_lengths(replace(clip, spec=spec))
+    skeleton = clip.skeleton
+    ratio = result.lengths[skeleton.bones[:, 1]] / hand.true_lengths(skeleton)[skeleton.bones[:, 1]]
+    assert np.median(ratio) == pytest.approx(2.0, rel=0.08)
+
+
+def test_truth_beats_estimates_and_given_beats_truth(make_clip, hand):
     clip = make_clip(CURL, bone_lengths={"thumb_tip": 20.0}, with_truth=True)
     result = clip_bone_lengths(clip)
     truth = hand.true_lengths(clip.skeleton)
-    sources = set(result.sources) - {None}
-    assert sources == {"given", "truth"}
-    index = clip.skeleton.index("thumb_tip")
-    assert result.lengths[index] == 20.0
+    assert set(result.sources) - {None} == {"given", "truth"}
+    assert result.lengths[clip.skeleton.index("thumb_tip")] == 20.0
     measured = [j for j, s in enumerate(result.sources) if s == "truth"]
     np.testing.assert_allclose(result.lengths[measured], truth[measured])
     assert (result.n_frames[measured] == CURL.size).all()
 
 
-def test_hidden_finger_comes_from_ratios(make_clip, ratios):
+def test_a_finger_never_seen_takes_the_xray_shares_of_its_seen_phalanges(make_clip, ratios):
     hidden = ("ring_dip", "ring_tip")
-    clip = make_clip(CURL, bone_lengths={"index_pip": 49.0}, hidden=hidden)
+    clip = make_clip(LONG_CURL, bone_lengths={"index_pip": 49.0}, hidden=hidden)
     result = clip_bone_lengths(clip, ratios)
     skeleton = clip.skeleton
-    mean, _ = bone_ratios(skeleton, ratios)
-    ring_pip = result.lengths[skeleton.index("ring_pip")]
     for joint in hidden:
-        j = skeleton.index(joint)
-        assert result.sources[j] == "ratios"
-        assert result.lengths[j] == pytest.approx(ring_pip / mean[skeleton.index("ring_pip")]
-                                                  * mean[j])
+        assert result.sources[skeleton.index(joint)] == "ratios"
+    mean, _ = bone_ratios(skeleton, ratios)
+    pip, dip = skeleton.index("ring_pip"), skeleton.index("ring_dip")
+    expected = result.lengths[pip] / mean[pip] * mean[dip]
+    assert result.lengths[dip] == pytest.approx(expected, rel=0.1)
 
 
-def test_palm_bone_unseen_comes_from_anthropometry(make_clip, hand):
-    clip = make_clip(CURL, bone_lengths={"index_pip": 49.0}, hidden=("little_mcp",))
+def test_a_palm_bone_never_seen_comes_from_the_hands_proportions(make_clip):
+    clip = make_clip(LONG_CURL, bone_lengths={"index_pip": 49.0}, hidden=("little_mcp",))
     result = clip_bone_lengths(clip)
-    skeleton = clip.skeleton
-    little = skeleton.index("little_mcp")
-    assert result.sources[little] == "anthropometric"
-    proportion = hand_length_proportions(skeleton)[little]
-    # The reference-frame bones are exact up to the scale the given index_pip sets.
-    scale = 49.0 / hand.true_lengths(skeleton)[skeleton.index("index_pip")]
-    assert result.lengths[little] == pytest.approx(proportion * hand.hand_length_mm * scale)
-    assert "Buchholz" in result.details[little]
+    little = clip.skeleton.index("little_mcp")
+    assert result.sources[little] == "proportions"
+    assert "hand" in result.details[little]
 
 
-def test_no_scale_raises(make_clip):
-    with pytest.raises(BoneLengthError, match="no bone length to scale"):
-        clip_bone_lengths(make_clip(CURL))
-
-
-def test_bone_without_any_source_raises(make_clip):
-    clip = make_clip(CURL, bone_lengths={"index_pip": 49.0}, hidden=("thumb_cmc",))
-    with pytest.raises(BoneLengthError, match="thumb_cmc") as info:
-        clip_bone_lengths(clip)
-    assert "bone_lengths" in str(info.value)
-
-
-
-
-def test_lengths_from_ratios_average_the_known_phalanges(ratios):
+def test_ratio_lengths_average_the_other_known_phalanges(ratios):
     skeleton = load_skeleton("mediapipe21")
     mean, _ = bone_ratios(skeleton, ratios)
     known = np.full(skeleton.n_joints, np.nan)
-    pip, dip = skeleton.index("middle_pip"), skeleton.index("middle_dip")
+    pip, dip, tip = skeleton.indices(["middle_pip", "middle_dip", "middle_tip"])
     known[pip], known[dip] = 50.0, 30.0
-    lengths, total = lengths_from_ratios(skeleton, known, mean)
-    expected_total = (50.0 / mean[pip] + 30.0 / mean[dip]) / 2
-    assert total[skeleton.index("middle_tip")] == pytest.approx(expected_total)
-    assert np.isnan(lengths[skeleton.index("index_tip")])
-    assert np.isnan(lengths[skeleton.index("middle_mcp")])
+    estimate = ratio_lengths(skeleton, known, mean)
+    total = (50.0 / mean[pip] + 30.0 / mean[dip]) / 2
+    assert estimate.lengths[tip] == pytest.approx(total * mean[tip])
+    assert estimate.lengths[pip] == pytest.approx(30.0 / mean[dip] * mean[pip])
+    assert np.isnan(estimate.lengths[skeleton.index("index_tip")])
 
 
-def test_table_has_a_row_per_bone(make_clip):
-    clip = make_clip(CURL, bone_lengths={"index_pip": 49.0}, with_truth=True)
+def test_table_has_a_row_per_bone_with_its_uncertainty(make_clip):
+    clip = make_clip(LONG_CURL, bone_lengths={"index_pip": 49.0})
     result = clip_bone_lengths(clip)
     table = bone_lengths_table(clip.clip_id, "s01", clip.skeleton, result)
     assert table.schema.equals(schema("bone_lengths"), check_metadata=False)
     assert table.num_rows == len(clip.skeleton.bone_names)
-    assert set(table["bone"].to_pylist()) == set(clip.skeleton.bone_names)
     assert set(table["source"].to_pylist()) <= set(SOURCES)
     given = table.filter(pc.equal(table["source"], "given"))
-    assert given["n_frames"].null_count == 1 and given["units"][0].as_py() == "mm"
+    assert given["uncertainty"].null_count == 1 and given["units"][0].as_py() == "mm"
+    assert table.filter(pc.equal(table["source"], "clip"))["uncertainty"].null_count == 0
 
 
-def test_buchholz_middle_finger_spans_the_hand():
-    middle = BUCHHOLZ_1992["middle"]
+def test_the_middle_finger_spans_the_hand():
     proportions = hand_length_proportions(load_skeleton("mediapipe21"))
     chain = load_skeleton("mediapipe21").finger_chain("middle")
     assert proportions[chain].sum() == pytest.approx(1.0)
-    assert proportions[chain[1]] == middle[1]
 
 
 def test_empty_ratio_table_falls_back_to_table1(make_clip):
-    clip = make_clip(CURL, bone_lengths={"index_pip": 49.0}, hidden=("ring_tip",))
+    clip = make_clip(LONG_CURL, bone_lengths={"index_pip": 49.0}, hidden=("ring_tip",))
     result = clip_bone_lengths(clip, empty("joint_ratios"))
     assert result.sources[clip.skeleton.index("ring_tip")] == "ratios"
     assert result.lengths == pytest.approx(clip_bone_lengths(clip).lengths, nan_ok=True)
+
+
+def test_a_sidecar_hand_length_must_be_a_positive_number(tmp_path):
+    from handdb.errors import InputError
+    from handdb.ingest.sidecar import parse_sidecar
+
+    sidecar = tmp_path / "c.clip.json"
+    sidecar.write_text(json.dumps({"skeleton": "mediapipe21", "hand": "right", "fps": 30,
+                                   "subject": "s", "units": "mm",
+                                   "camera": {"model": "orthographic"}, "hand_length": -3}))
+    with pytest.raises(InputError, match="hand_length"):
+        parse_sidecar(sidecar)
