@@ -15,6 +15,8 @@ from handdb.ingest import (
     markers_csv,
     maya,
     mediapipe,
+    mediapipe_csv,
+    mediapipe_world,
     openpose,
     tracks_csv,
     truth_csv,
@@ -37,7 +39,8 @@ from handdb.ingest.registry import (
     registered_formats,
 )
 
-for _module in (tracks_csv, openpose, dlc, mediapipe, maya, truth_csv, markers_csv, c3d, xray):
+for _module in (tracks_csv, openpose, dlc, mediapipe, mediapipe_csv, maya, truth_csv,
+                markers_csv, c3d, mediapipe_world, xray):
     register_format(_module.FORMAT)
 del _module
 
