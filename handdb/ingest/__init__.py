@@ -11,13 +11,16 @@ Every format is registered here, in one place (:data:`handdb.ingest.registry.FOR
 
 from handdb.ingest import (
     c3d,
+    dhg,
     dlc,
+    interhand,
     markers_csv,
     maya,
     mediapipe,
     mediapipe_csv,
     mediapipe_world,
     openpose,
+    qtm,
     tracks_csv,
     truth_csv,
     xray,
@@ -40,7 +43,7 @@ from handdb.ingest.registry import (
 )
 
 for _module in (tracks_csv, openpose, dlc, mediapipe, mediapipe_csv, maya, truth_csv,
-                markers_csv, c3d, mediapipe_world, xray):
+                markers_csv, c3d, qtm, interhand, dhg, mediapipe_world, xray):
     register_format(_module.FORMAT)
 del _module
 
