@@ -12,7 +12,8 @@ Sidecar options: ``individual`` names the individual whose columns are read (req
 when the ``individuals`` row names more than one; empty cells never count as one);
 ``frame_from`` says where frame numbers come from: ``"index"`` (the default, the frame
 index of an analysed video), ``"image_name"`` (the last run of digits of the image's file
-name, ``img040.png`` -> 40) or ``"row"`` (0, 1, 2, ... in row order). Body part names
+name, ``img040.png`` -> 40; the images must be at least :data:`LABELLED_MIN_SHARE` of the
+frames they span) or ``"row"`` (0, 1, 2, ... in row order). Body part names
 resolve by the one ``joint_map`` rule (:func:`~handdb.ingest.observations.resolve_names`);
 an empty ``x``/``y`` is a missing point.
 """
@@ -57,6 +58,12 @@ IMAGE_PATH = re.compile(r"[\\/]|\.(png|jpe?g|bmp|tiff?)$", re.IGNORECASE)
 
 #: The number in an image's file name: its last run of digits.
 IMAGE_NUMBER = re.compile(r"(\d+)\D*$")
+
+#: The smallest share of the frames between the first and the last labelled image that
+#: must be labelled for ``"frame_from": "image_name"``: DeepLabCut labels a few frames
+#: picked from a video, and 20 images over 425 frames are not a track (gap filling would
+#: invent the other 405).
+LABELLED_MIN_SHARE = 0.2
 
 
 @dataclass(frozen=True)
@@ -172,6 +179,12 @@ def _image_numbers(table: DelimitedTable, index: list[str]) -> np.ndarray:
             raise table.error(row, "frame", f"image number {frames[row]} is also on line "
                               f"{table.line[first_row[frames[row]]]}; keep one row per image")
         first_row[int(frames[row])] = row
+    span = int(frames.max()) + 1
+    if frames.size < LABELLED_MIN_SHARE * span:
+        row = int(np.argmax(frames))
+        raise table.error(row, "frame", f"the {frames.size} labelled images span {span} frames "
+                          f"of the video (up to image number {frames[row]}): too few to be a "
+                          'track; use "frame_from": "row" to read them as consecutive frames')
     return frames
 
 
