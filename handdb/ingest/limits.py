@@ -89,8 +89,8 @@ def checked_size(path: Path, max_bytes: int = MAX_FILE_BYTES) -> int:
         raise InputError(path, f"is not a regular file ({file_kind(info.st_mode)}); handdb "
                          "reads inputs from regular files only")
     if info.st_size > max_bytes:
-        raise InputError(path, f"is {info.st_size / 1024**3:.1f} GiB; handdb reads input "
-                         f"files up to {max_bytes / 1024**3:g} GiB")
+        raise InputError(path, f"is {info.st_size:,} bytes; handdb reads such files up to "
+                         f"{max_bytes:,} bytes")
     return info.st_size
 
 

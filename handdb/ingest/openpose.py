@@ -135,9 +135,11 @@ def _select(people_by_file: Sequence[tuple[Path, list[dict[str, Any]]]], spec: C
                              f'(0 to {n - 1}) or "person": {{"id": n}} in {sidecar}',
                              field="people")
         return [0 if people else None for _, people in people_by_file]
-    for (first, n_first), (path, n) in zip(counts, counts[1:], strict=False):
+    for path, n in counts[1:]:
+        first, n_first = counts[0]
         if n != n_first:
-            raise InputError(path, f"{n} people here but {n_first} in {first.name}; the order "
+            here = f"{n} {'person' if n == 1 else 'people'}"
+            raise InputError(path, f"{here} here but {n_first} in {first.name}; the order "
                              "of people is not stable across frames, select by "
                              '"person": {"id": n} (run OpenPose with --tracking 1) or split '
                              "the folder", field="people")
