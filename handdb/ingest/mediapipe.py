@@ -315,18 +315,15 @@ def image_scale(system: str, spec: ClipSpec) -> np.ndarray:
     return np.array([spec.image_width, spec.image_height], dtype=np.float64)
 
 
-def check_normalised(xy: np.ndarray, path: Path, field: str, row: int | None = None) -> None:
-    """Refuse normalised ``xy`` ``(N, 2)`` beyond :data:`NORMALISED_RANGE` (pixels?).
-
-    ``row`` is the 1-based line of the file, where the format has lines.
-    """
+def check_normalised(xy: np.ndarray, path: Path, field: str) -> None:
+    """Refuse normalised landmarks ``xy`` ``(21, 2)`` beyond :data:`NORMALISED_RANGE`."""
     low, high = NORMALISED_RANGE
     outside = np.argwhere((xy < low) | (xy > high))
     if outside.size:
         k, axis = outside[0]
         raise InputError(path, f"landmark {k} at {'xy'[axis]}={xy[k, axis]:g} lies far outside "
                          f"the image (normalised coordinates lie within [{low}, {high}]); are "
-                         'these pixels? Set "coordinates": "pixels"', line=row, field=field)
+                         'these pixels? Set "coordinates": "pixels"', field=field)
 
 
 def read(path: str | Path, spec: ClipSpec, skeleton: Skeleton) -> Observations:
