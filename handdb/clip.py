@@ -45,7 +45,31 @@ class Camera:
 
 @dataclass(frozen=True)
 class ClipSpec:
-    """The validated content of a clip's sidecar."""
+    """The validated content of a clip's sidecar.
+
+    ``joint_map`` maps a tool's names to canonical joint names, or to ``None`` for names
+    that are known and ignored; the key ``"*"`` (always ``None``) ignores every name that
+    is neither canonical nor a key. The attributes after ``lift`` are reader options, each
+    ``None`` when the sidecar does not give it (the reader's default then applies):
+
+    ``person``, ``person_id``
+        OpenPose: the index in ``people`` (``"person": n``) or the tracked person id
+        (``"person": {"id": n}``).
+    ``individual``
+        DeepLabCut multi-animal files: the individual whose columns are read.
+    ``frame_from``
+        DeepLabCut: ``"index"``, ``"image_name"`` or ``"row"``, where frame numbers come
+        from.
+    ``hand_index``, ``handedness``
+        MediaPipe: the hand by its position in MediaPipe's list, or by its label.
+    ``coordinates``
+        OpenPose and MediaPipe: ``"pixels"``, ``"normalized"`` ([0, 1] of the image) or
+        ``"normalized_signed"`` ([-1, 1], OpenPose only).
+    ``capture``
+        InterHand2.6M: the capture id.
+    ``frame_offset``
+        InterHand2.6M: an integer subtracted from the frame ids, or ``"first"``.
+    """
 
     clip_id: str
     path: str
@@ -58,11 +82,20 @@ class ClipSpec:
     bone_lengths: dict[str, float] = field(default_factory=dict)
     hand_length: float | None = None
     min_confidence: float = DEFAULT_MIN_CONFIDENCE
-    joint_map: dict[str, str] = field(default_factory=dict)
+    joint_map: dict[str, str | None] = field(default_factory=dict)
     image_width: int | None = None
     image_height: int | None = None
     gap_fill: dict[str, Any] = field(default_factory=dict)
     lift: dict[str, Any] = field(default_factory=dict)
+    person: int | None = None
+    person_id: int | None = None
+    individual: str | None = None
+    frame_from: str | None = None
+    hand_index: int | None = None
+    handedness: str | None = None
+    coordinates: str | None = None
+    capture: str | None = None
+    frame_offset: int | str | None = None
     raw: str = "{}"
 
     @property

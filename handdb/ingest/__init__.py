@@ -11,11 +11,16 @@ Every format is registered here, in one place (:data:`handdb.ingest.registry.FOR
 
 from handdb.ingest import (
     c3d,
+    dhg,
     dlc,
+    interhand,
     markers_csv,
     maya,
     mediapipe,
+    mediapipe_csv,
+    mediapipe_world,
     openpose,
+    qtm,
     tracks_csv,
     truth_csv,
     xray,
@@ -37,13 +42,14 @@ from handdb.ingest.registry import (
     registered_formats,
 )
 
-for _module in (tracks_csv, openpose, dlc, mediapipe, maya, truth_csv, markers_csv, c3d, xray):
+for _module in (tracks_csv, openpose, dlc, mediapipe, mediapipe_csv, maya, truth_csv,
+                markers_csv, c3d, qtm, interhand, dhg, mediapipe_world, xray):
     register_format(_module.FORMAT)
 del _module
 
 #: Version of reading the inbox's files into a clip. Raise it when a change alters the output; it
 #: enters the build keys (:mod:`handdb.build.keys`), a docstring edit or a speed-up does not.
-VERSION = 1
+VERSION = 2
 
 __all__ = [
     "ClipEntry",

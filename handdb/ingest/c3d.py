@@ -1,15 +1,28 @@
 """3D marker tracks in C3D files, ``<clip_id>.c3d``, read with the ``c3d`` package.
 
-A C3D file holds labelled 3D points per frame. Each label (trailing blanks dropped) is a
-canonical joint name or a name the sidecar's ``joint_map`` maps to one; points with other
-labels (extra markers of the capture) are left out. A point the capture lost in a frame
-(negative residual) is missing. Coordinates are converted from the file's ``POINT:UNITS``
-to the clip's units. C3D frames are numbered from the file's first frame; here from 0.
+A C3D file holds labelled 3D points per frame. Each label (blanks and NULs around it
+dropped) is a joint by the one ``joint_map`` rule of
+:func:`~handdb.ingest.observations.resolve_names`: a capture's extra markers must be
+mapped to ``null``, or ignored all at once with ``"*": null``. A point the capture lost in
+a frame (negative residual; non-finite coordinates count as lost) is missing; a residual
+of 0 (a point the capture software modelled) is kept. Coordinates are converted from the
+file's ``POINT:UNITS`` (one unit for the file or one per point, all alike; millimetres
+when absent, the C3D default) to the clip's units. Frames count from the file's first
+frame, here 0; ``POINT:RATE`` must be the sidecar's ``fps``.
+
+The file is checked before the ``c3d`` package reads it (its header, parameter section
+and data must lie inside the file), every error of the package becomes an
+:class:`~handdb.errors.InputError`, and a file holding fewer frames than its header says
+(a truncated export) is refused. ANALOG, FORCE_PLATFORM and other groups are ignored; a
+file without 3D points (force plates only) is refused.
 """
 
 from __future__ import annotations
 
+import math
+import struct
 import warnings
+from dataclasses import dataclass
 from pathlib import Path
 
 import c3d
@@ -18,31 +31,188 @@ import numpy as np
 from handdb.clip import METERS_PER_UNIT, ClipSpec
 from handdb.errors import InputError
 from handdb.hand.skeletons import Skeleton
-from handdb.ingest.observations import Positions, resolve_joints, single_file_rows
+from handdb.ingest.limits import MAX_FRAMES, checked_size, frame_limit_reason
+from handdb.ingest.observations import Positions, resolve_names, single_file_rows
 from handdb.ingest.registry import MARKERS_KIND, InputFormat
 
 #: The C3D parameter that names the point units.
 UNITS_PARAMETER = "POINT:UNITS"
 
+#: The C3D parameter that names the points.
+LABELS_PARAMETER = "POINT:LABELS"
+
 #: Point rate written when a clip's frame rate is not given.
 DEFAULT_POINT_RATE = 120.0
 
+#: Bytes in a C3D block; the header is the first block.
+BLOCK_BYTES = 512
 
-def _read_points(path: Path) -> tuple[list[str], np.ndarray, str]:
-    """Labels, ``(T, N, 4)`` points (x, y, z, residual) and the units of a C3D file."""
+#: The second byte of every C3D file.
+C3D_MARK = 0x50
+
+#: The processor byte of big-endian (MIPS) files; Intel (84) and DEC (85) are little-endian.
+BIG_ENDIAN_PROCESSOR = 86
+
+#: Units when a file has no ``POINT:UNITS`` (the C3D standard's default).
+DEFAULT_UNITS = "mm"
+
+#: Relative difference between ``POINT:RATE`` and the sidecar's fps taken as equal.
+RATE_TOLERANCE = 1e-3
+
+#: Everything the ``c3d`` package raises on a damaged file (it asserts on some checks,
+#: which ``python -O`` removes: the pre-checks here do not rely on them).
+C3D_ERRORS = (struct.error, AssertionError, AttributeError, ValueError, KeyError, IndexError,
+              EOFError, OverflowError, TypeError, UnicodeDecodeError, ZeroDivisionError)
+
+
+@dataclass(frozen=True)
+class _Points:
+    """The 3D points of a C3D file: labels, ``(T, N, 4)`` x, y, z, residual, units."""
+
+    labels: list[str]
+    points: np.ndarray
+    units: str
+    rate: float
+
+
+def _unreadable(path: Path, exc: Exception) -> InputError:
+    detail = str(exc).strip() or type(exc).__name__
+    return InputError(path, f"is not a readable C3D file ({detail})")
+
+
+def _precheck(path: Path) -> None:
+    """Refuse a file too short for its own header, parameter section or data start."""
+    size = checked_size(path)
+    if size < BLOCK_BYTES:
+        raise InputError(path, f"is not a C3D file (it is {size} bytes; a C3D header alone is "
+                         f"{BLOCK_BYTES})")
+    with path.open("rb") as handle:
+        header = handle.read(BLOCK_BYTES)
+        if header[1] != C3D_MARK:
+            raise InputError(path, "is not a C3D file (its second byte is not the C3D mark "
+                             f"0x{C3D_MARK:X})")
+        parameter_start = (max(header[0], 1) - 1) * BLOCK_BYTES
+        handle.seek(parameter_start)
+        parameter_head = handle.read(4)
+    if len(parameter_head) < 4:
+        raise InputError(path, f"ends before its parameter section ({size} of at least "
+                         f"{parameter_start + 4} bytes); the file is truncated")
+    parameter_end = parameter_start + parameter_head[2] * BLOCK_BYTES
+    if parameter_end > size:
+        raise InputError(path, f"ends inside its parameter section ({size} of at least "
+                         f"{parameter_end} bytes); the file is truncated")
+    order = ">" if parameter_head[3] == BIG_ENDIAN_PROCESSOR else "<"
+    data_start = (max(struct.unpack(order + "H", header[16:18])[0], 1) - 1) * BLOCK_BYTES
+    if data_start > size:
+        raise InputError(path, f"ends before its data ({size} of at least {data_start} "
+                         "bytes); the file is truncated")
+
+
+def _no_points_reason(reader: c3d.Reader) -> str:
+    """Say what a C3D file without 3D points holds instead."""
+    analog = reader.get("ANALOG:USED")
+    plates = reader.get("FORCE_PLATFORM:USED")
+    parts = []
+    if analog is not None and analog.int16_value > 0:
+        rate = reader.get("ANALOG:RATE")
+        at = f" at {rate.float_value:g} Hz" if rate is not None else ""
+        parts.append(f"{analog.int16_value} analog channels{at}")
+    if plates is not None and plates.int16_value > 0:
+        parts.append(f"{plates.int16_value} force plates")
+    held = f" (it has {' and '.join(parts)})" if parts else ""
+    return (f"holds no 3D points{held}; handdb reads marker trajectories: export the "
+            "markers to C3D")
+
+
+def _labels(reader: c3d.Reader, path: Path, n_points: int) -> list[str]:
+    """The point labels, blanks and NULs stripped; one per point."""
+    param = reader.get(LABELS_PARAMETER)
+    labels = [] if param is None else [str(label).strip(" \0") for label in
+                                       np.atleast_1d(param.string_array)]
+    if len(labels) < n_points:
+        raise InputError(path, f"has {len(labels)} labels for {n_points} points",
+                         field=LABELS_PARAMETER)
+    labels = labels[:n_points]
+    for k, label in enumerate(labels):
+        if not label:
+            raise InputError(path, f"point {k + 1} has an empty label", field=LABELS_PARAMETER)
+        if label in labels[:k]:
+            raise InputError(path, f"label '{label}' is given to two points",
+                             field=LABELS_PARAMETER)
+    return labels
+
+
+def _units(reader: c3d.Reader, path: Path, labels: list[str]) -> str:
+    """The one unit of every point: ``POINT:UNITS`` once, or once per point all alike."""
+    param = reader.get(UNITS_PARAMETER)
+    if param is None:
+        return DEFAULT_UNITS
+    given = ([str(unit).strip(" \0") for unit in np.atleast_1d(param.string_array)]
+             if len(param.dimensions) > 1 else [param.string_value.strip(" \0")])
+    units = [unit.lower() for unit in given]
+    for unit, raw in zip(units, given, strict=True):
+        if unit not in METERS_PER_UNIT:
+            raise InputError(path, f"point units '{raw}' are not one of "
+                             f"{', '.join(METERS_PER_UNIT)}", field=UNITS_PARAMETER)
+    if len(set(units)) > 1:
+        other = next(k for k, unit in enumerate(units) if unit != units[0])
+        raise InputError(path, f"points use different units ({units[0]} for {labels[0]}, "
+                         f"{units[other]} for {labels[min(other, len(labels) - 1)]})",
+                         field=UNITS_PARAMETER)
+    return units[0]
+
+
+def _check_complete(reader: c3d.Reader, path: Path, n_frames: int) -> None:
+    """Refuse a file whose data ends before the frames its header promises."""
+    size = path.stat().st_size
+    data_start = (int(reader.header.data_block) - 1) * BLOCK_BYTES
+    word = 4 if reader.point_scale < 0 else 2
+    frame_bytes = word * (4 * int(reader.point_used)
+                          + int(reader.analog_used) * max(int(reader.analog_per_frame), 0))
+    needed = data_start + n_frames * frame_bytes
+    if size < needed:
+        held = max(size - data_start, 0) // frame_bytes
+        raise InputError(path, f"holds {held} frames of POINT data, but its header says "
+                         f"{n_frames} (the file is {size} bytes, {needed} needed): it is "
+                         "truncated; export it again", field="POINT:FRAMES")
+
+
+def _read_points(path: Path) -> _Points:
+    """Read the labelled points of a C3D file, refusing damaged or incomplete files."""
+    _precheck(path)
     try:
         with path.open("rb") as handle, warnings.catch_warnings():
             warnings.simplefilter("ignore", UserWarning)
             reader = c3d.Reader(handle)
-            labels = [str(label).strip() for label in reader.point_labels]
-            units_param = reader.get(UNITS_PARAMETER)
-            units = units_param.string_value.strip() if units_param is not None else "mm"
+            used = reader.get("POINT:USED")
+            if reader.get("POINT") is None or used is None or used.int16_value <= 0:
+                raise InputError(path, _no_points_reason(reader), field="POINT:USED")
+            n_frames = int(reader.frame_count)
+            if n_frames > MAX_FRAMES:
+                raise InputError(path, frame_limit_reason(n_frames - 1), field="POINT:FRAMES")
+            if n_frames <= 0:
+                raise InputError(path, "holds no frames", field="POINT:FRAMES")
+            _check_complete(reader, path, n_frames)
+            labels = _labels(reader, path, int(reader.point_used))
+            units = _units(reader, path, labels)
+            rate = float(reader.point_rate)
             frames = [points[:, :4].astype(np.float64) for _, points, _ in reader.read_frames()]
-    except (ValueError, KeyError, IndexError, EOFError, AssertionError, OSError) as exc:
-        raise InputError(path, f"is not a readable C3D file ({exc})") from None
-    if not frames:
-        raise InputError(path, "holds no frames")
-    return labels, np.stack(frames), units
+    except C3D_ERRORS as exc:
+        raise _unreadable(path, exc) from None
+    if len(frames) < n_frames:
+        raise InputError(path, f"holds {len(frames)} frames of POINT data, but its header "
+                         f"says {n_frames}: it is truncated; export it again",
+                         field="POINT:FRAMES")
+    return _Points(labels=labels, points=np.stack(frames), units=units, rate=rate)
+
+
+def _check_rate(rate: float, path: Path, spec: ClipSpec) -> None:
+    if not math.isfinite(rate) or rate <= 0:
+        raise InputError(path, f"POINT:RATE {rate:g} is not a frame rate", field="POINT:RATE")
+    if abs(rate - spec.fps) > RATE_TOLERANCE * rate:
+        raise InputError(spec.path, f"is {spec.fps:g}, but {path.name} records POINT:RATE "
+                         f"{rate:g} Hz; set \"fps\": {rate:g}", field="fps",
+                         clip_id=spec.clip_id)
 
 
 def read(path: str | Path, spec: ClipSpec, skeleton: Skeleton) -> Positions:
@@ -51,28 +221,21 @@ def read(path: str | Path, spec: ClipSpec, skeleton: Skeleton) -> Positions:
     Raises
     ------
     InputError
-        If the file is not C3D, has no frames, names units other than mm, cm, m or in,
-        names a joint twice, or has no label that is a joint of ``skeleton``.
+        If the file is not C3D or is damaged or truncated, holds no 3D points or no
+        frames, names units other than mm, cm, m or in (or different units per point),
+        has a label the ``joint_map`` rule refuses, or records a ``POINT:RATE`` other than
+        the sidecar's ``fps``.
     """
     path = Path(path)
-    labels, points, units = _read_points(path)
-    if units not in METERS_PER_UNIT:
-        raise InputError(path, f"point units '{units}' are not one of "
-                         f"{', '.join(METERS_PER_UNIT)}", field=UNITS_PARAMETER)
-    joints = resolve_joints(labels, spec, skeleton)
+    points = _read_points(path)
+    _check_rate(points.rate, path, spec)
+    joints = resolve_names(points.labels, spec, skeleton, path,
+                           lambda k: (None, LABELS_PARAMETER))
     known = np.flatnonzero(joints >= 0)
-    if not known.size:
-        raise InputError(path, f"no point label ({', '.join(labels)}) is a joint of "
-                         f"'{skeleton.name}' or in the sidecar's joint_map", field="joint_map",
-                         clip_id=spec.clip_id)
-    taken, counts = np.unique(joints[known], return_counts=True)
-    if (counts > 1).any():
-        twice = skeleton.joints[taken[counts > 1][0]]
-        raise InputError(path, f"two point labels map to joint '{twice}'", field="joint_map",
-                         clip_id=spec.clip_id)
-    present = points[:, known, 3] >= 0
+    present = points.points[:, known, 3] >= 0
     frame, column = np.nonzero(present)
-    xyz = points[frame, known[column], :3] * (METERS_PER_UNIT[units] / spec.meters_per_unit)
+    scale = METERS_PER_UNIT[points.units] / spec.meters_per_unit
+    xyz = points.points[frame, known[column], :3] * scale
     source, files = single_file_rows(path, len(frame))
     return Positions(
         frame=frame.astype(np.int64),
@@ -82,8 +245,20 @@ def read(path: str | Path, spec: ClipSpec, skeleton: Skeleton) -> Positions:
         source=source,
         files=files,
         skeleton=skeleton,
-        n_frames=len(points),
+        n_frames=len(points.points),
+        names=frozenset(points.labels),
+        fields=dict.fromkeys("xyz", "POINT:DATA {joint}"),
+        joint_names=_joint_names(points.labels, joints, skeleton),
     )
+
+
+def _joint_names(labels: list[str], joints: np.ndarray, skeleton: Skeleton) -> tuple[str, ...]:
+    """The file's label of each skeleton joint (canonical names for joints it lacks)."""
+    names = list(skeleton.joints)
+    for label, joint in zip(labels, joints, strict=True):
+        if joint >= 0:
+            names[joint] = label
+    return tuple(names)
 
 
 def write(path: str | Path, markers: np.ndarray, skeleton: Skeleton, *, units: str = "mm",
@@ -116,5 +291,4 @@ def write(path: str | Path, markers: np.ndarray, skeleton: Skeleton, *, units: s
         writer.write(handle)
 
 
-FORMAT = InputFormat(name="c3d", suffix=".c3d", kind=MARKERS_KIND, read=read,
-                                     write=write)
+FORMAT = InputFormat(name="c3d", suffix=".c3d", kind=MARKERS_KIND, read=read, write=write)

@@ -17,6 +17,7 @@ import pyarrow.compute as pc
 import pyarrow.csv as pacsv
 
 from handdb.errors import InputError
+from handdb.ingest.limits import frame_limit_reason, quoted, read_input
 
 #: A decimal number: optional sign, digits with an optional fraction, optional exponent.
 #: Cells are parsed by pyarrow; the pattern finds the cell that pyarrow refused.
@@ -27,15 +28,35 @@ INTEGER_PATTERN = r"^-?\d+$"
 
 _NEWLINE, _CARRIAGE_RETURN = ord("\n"), ord("\r")
 
+#: The byte-order marks of UTF-16 text.
+_UTF16_MARKS = (b"\xff\xfe", b"\xfe\xff")
+
 #: A delimiter no text line holds, to read each line as one cell.
 _UNUSED_DELIMITER = "\x1f"
 
 
 def read_bytes(path: Path) -> bytes:
-    """Return the bytes of ``path``; raise :class:`InputError` if it holds no text."""
-    data = path.read_bytes()
+    """Return the bytes of the text file ``path``.
+
+    Raises
+    ------
+    InputError
+        If ``path`` is not a regular file or is too large
+        (:func:`~handdb.ingest.limits.read_input`), holds no text, is UTF-16, ends its
+        lines with carriage returns alone, or holds a NUL byte.
+    """
+    data = read_input(path)
     if not data.strip():
         raise InputError(path, "is empty")
+    if data.startswith(_UTF16_MARKS):
+        raise InputError(path, "is UTF-16 text; save it as UTF-8")
+    if b"\n" not in data and data.count(b"\r") > 1:
+        raise InputError(path, "uses carriage returns alone as line ends (old Mac text); "
+                         "save it with LF or CRLF line ends")
+    nul = data.find(b"\0")
+    if nul >= 0:
+        raise InputError(path, "holds a NUL byte; the file is binary or damaged",
+                         line=data.count(b"\n", 0, nul) + 1)
     return data
 
 
@@ -93,6 +114,13 @@ class DelimitedTable:
         """Number of data rows."""
         return int(self.line.size)
 
+    def take(self, keep: np.ndarray) -> DelimitedTable:
+        """The rows where ``keep`` (``(N,) bool``) is true, as a new table."""
+        mask = pa.array(keep)
+        return DelimitedTable(path=self.path, line=self.line[keep],
+                              columns={name: cells.filter(mask)
+                                       for name, cells in self.columns.items()})
+
     def error(self, row: int, column: str, reason: str) -> InputError:
         """Return an :class:`InputError` at data row ``row``, column ``column``."""
         return InputError(self.path, reason, line=int(self.line[row]), field=column)
@@ -123,27 +151,37 @@ class DelimitedTable:
             values = pc.cast(pc.if_else(empty, None, cells), pa.float64())
         except pa.ArrowInvalid:
             row = self._first_mismatch(column, NUMBER_PATTERN, skip_empty=True)
-            raise self.error(row, column, f"'{cells[row].as_py()}' is not a number") from None
+            raise self.error(row, column, f"{quoted(cells[row].as_py())} is not a number"
+                             ) from None
         values = values.to_numpy(zero_copy_only=False)
         is_empty = empty.to_numpy(zero_copy_only=False)
         non_finite = np.flatnonzero(~np.isfinite(values) & ~is_empty)
         if non_finite.size:
             row = int(non_finite[0])
-            raise self.error(row, column, f"'{cells[row].as_py()}' is not a finite number; "
-                             "leave the cell empty for a missing point")
+            raise self.error(row, column, f"{quoted(cells[row].as_py())} is not a finite "
+                             "number; leave the cell empty for a missing point")
         if not allow_empty and is_empty.any():
             row = int(np.flatnonzero(is_empty)[0])
             raise self.error(row, column, "is empty; a value is required")
         return values
 
     def frames(self, column: str) -> np.ndarray:
-        """Parse ``column`` as frame numbers (whole, from 0), ``(N,) int64``."""
+        """Parse ``column`` as frame numbers (whole, from 0), ``(N,) int64``.
+
+        Frame numbers beyond :data:`~handdb.ingest.limits.MAX_FRAMES` are refused by
+        :class:`~handdb.ingest.observations.Observations`; those beyond int64 here.
+        """
         cells = self.columns[column]
         try:
             frame = pc.cast(cells, pa.int64()).to_numpy(zero_copy_only=False)
         except pa.ArrowInvalid:
-            row = self._first_mismatch(column, INTEGER_PATTERN, skip_empty=False)
-            raise self.error(row, column, f"'{cells[row].as_py()}' is not a whole frame "
+            whole = pc.match_substring_regex(cells, INTEGER_PATTERN).to_numpy(
+                zero_copy_only=False)
+            if whole.all():
+                row = int(np.argmax(pc.utf8_length(cells).to_numpy(zero_copy_only=False)))
+                raise self.error(row, column, frame_limit_reason(cells[row].as_py())) from None
+            row = int(np.argmin(whole))
+            raise self.error(row, column, f"{quoted(cells[row].as_py())} is not a whole frame "
                              "number; frames count 0, 1, 2, ...") from None
         negative = np.flatnonzero(frame < 0)
         if negative.size:
@@ -195,10 +233,16 @@ def read_delimited(path: Path, data: bytes, *, names: list[str], header_lines: i
     wrong = np.flatnonzero(cells != len(names))
     if wrong.size:
         row = int(wrong[0])
+        line = int(data_lines[row])
+        text = data[lines.start[line - 1]:lines.end[line - 1]]
+        hint = ("; the file looks truncated" if row == data_lines.size - 1 else "")
+        if cells[row] > len(names) and b'"' in text:
+            hint = (f"; a quoted cell holds a '{delimiter}' (a decimal comma?): use '.' for "
+                    "decimals")
+        shown = delimiter.join(names)
         raise InputError(
-            path, f"has {cells[row]} fields, expected {len(names)} ({delimiter.join(names)})"
-            + ("; the file looks truncated" if row == data_lines.size - 1 else ""),
-            line=int(data_lines[row]))
+            path, f"has {cells[row]} fields, expected {len(names)} "
+            f"({shown if len(shown) <= 80 else shown[:77] + '...'}){hint}", line=line)
     if not data_lines.size:
         empty = pa.array([], pa.string())
         return DelimitedTable(path=path, columns=dict.fromkeys(names, empty),

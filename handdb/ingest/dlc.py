@@ -1,16 +1,28 @@
-"""DeepLabCut CSV output, ``<clip_id>.dlc.csv``.
+r"""DeepLabCut CSV files, ``<clip_id>.dlc.csv``: analysed videos and labelled data.
 
 Three or four header rows, each led by its label in the first column: ``scorer`` (the
-model), optionally ``individuals`` (multi-animal projects; one individual only),
-``bodyparts`` and ``coords``. Each body part has an ``x`` and a ``y`` column and
-optionally a ``likelihood`` column. Data rows start with the frame index. Body part names
-are canonical joint names or names the sidecar's ``joint_map`` maps; an empty ``x``/``y``
-is a missing point.
+model or labeller), optionally ``individuals`` (multi-animal projects), ``bodyparts`` and
+``coords``. Each body part has an ``x`` and a ``y`` column and optionally a ``likelihood``
+column. Data rows start with their index: the frame number of an analysed video, or the
+image path of labelled data (``labeled-data\<video>\img040.png``); DeepLabCut 2.3 and
+later split that path over three index columns (``labeled-data,<video>,img040.png``), its
+header rows then having two empty cells after their label.
+
+Sidecar options: ``individual`` names the individual whose columns are read (required
+when the ``individuals`` row names more than one; empty cells never count as one);
+``frame_from`` says where frame numbers come from: ``"index"`` (the default, the frame
+index of an analysed video), ``"image_name"`` (the last run of digits of the image's file
+name, ``img040.png`` -> 40; the images must be at least :data:`LABELLED_MIN_SHARE` of the
+frames they span) or ``"row"`` (0, 1, 2, ... in row order). Body part names
+resolve by the one ``joint_map`` rule (:func:`~handdb.ingest.observations.resolve_names`);
+an empty ``x``/``y`` is a missing point.
 """
 
 from __future__ import annotations
 
+import re
 from collections.abc import Mapping
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -19,13 +31,16 @@ import pyarrow as pa
 from handdb.clip import ClipSpec
 from handdb.errors import InputError
 from handdb.hand.skeletons import Skeleton
-from handdb.ingest.delimited import TextLines, read_bytes, read_delimited, split_header, write_csv
-from handdb.ingest.observations import (
-    Observations,
-    resolve_joints,
-    single_file_rows,
-    unknown_joint,
+from handdb.ingest.delimited import (
+    DelimitedTable,
+    TextLines,
+    read_bytes,
+    read_delimited,
+    split_header,
+    write_csv,
 )
+from handdb.ingest.limits import quoted
+from handdb.ingest.observations import Observations, resolve_names, single_file_rows
 from handdb.ingest.registry import InputFormat
 
 #: Header rows by their label in the first column; ``individuals`` is optional.
@@ -34,9 +49,41 @@ HEADER_LABELS = ("scorer", "individuals", "bodyparts", "coords")
 #: The coordinates a body part may have; ``likelihood`` is optional.
 COORDS = ("x", "y", "likelihood")
 
+#: Index columns of labelled data written by DeepLabCut 2.3 and later:
+#: ``labeled-data``, the video's folder, the image's file name.
+SPLIT_INDEX_COLUMNS = 3
 
-def _header(path: Path, data: bytes, lines: TextLines) -> dict[str, tuple[int, list[str]]]:
-    """Return the header rows by label: their line number and cells after the label."""
+#: An index cell that is an image path rather than a frame number.
+IMAGE_PATH = re.compile(r"[\\/]|\.(png|jpe?g|bmp|tiff?)$", re.IGNORECASE)
+
+#: The number in an image's file name: its last run of digits.
+IMAGE_NUMBER = re.compile(r"(\d+)\D*$")
+
+#: The smallest share of the frames between the first and the last labelled image that
+#: must be labelled for ``"frame_from": "image_name"``: DeepLabCut labels a few frames
+#: picked from a video, and 20 images over 425 frames are not a track (gap filling would
+#: invent the other 405).
+LABELLED_MIN_SHARE = 0.2
+
+
+@dataclass(frozen=True)
+class _Layout:
+    """The header of a DeepLabCut CSV file.
+
+    Attributes
+    ----------
+    rows
+        Header rows by label: their 1-based line and their cells after the index columns.
+    index_columns
+        1, or 3 for the split image path of DeepLabCut 2.3 labelled data.
+    """
+
+    rows: dict[str, tuple[int, list[str]]]
+    index_columns: int
+
+
+def _header(path: Path, data: bytes, lines: TextLines) -> _Layout:
+    """Read and check the header rows."""
     first_lines = lines.nonblank[:len(HEADER_LABELS)]
     rows = [split_header(data[lines.start[n - 1]:lines.end[n - 1]], ",") for n in first_lines]
     labels = [cells[0] for cells in rows]
@@ -48,38 +95,60 @@ def _header(path: Path, data: bytes, lines: TextLines) -> dict[str, tuple[int, l
             raise InputError(path, "is not a DeepLabCut CSV: the header rows must be labelled "
                              f"{', '.join(expected)} in their first cell; expected '{label}' "
                              "here", line=line, field=label)
-    header = {label: (int(first_lines[k]), rows[k][1:]) for k, label in enumerate(expected)}
+    split = all(len(cells) > SPLIT_INDEX_COLUMNS and cells[1:SPLIT_INDEX_COLUMNS] == ["", ""]
+                for cells in rows[:len(expected)])
+    index_columns = SPLIT_INDEX_COLUMNS if split else 1
+    header = {label: (int(first_lines[k]), rows[k][index_columns:])
+              for k, label in enumerate(expected)}
     widths = {len(cells) for _, cells in header.values()}
     if len(widths) > 1:
         line, _ = min(header.values(), key=lambda row: len(row[1]))
         raise InputError(path, "header rows have different numbers of cells; the file looks "
                          "truncated or hand-edited", line=line)
-    return header
+    return _Layout(rows=header, index_columns=index_columns)
 
 
-def _columns(path: Path, header: dict[str, tuple[int, list[str]]]) -> list[tuple[str, str]]:
-    """(body part, coordinate) of every data column after the frame index, validated."""
-    if "individuals" in header:
-        line, individuals = header["individuals"]
-        names = sorted(set(individuals))
-        if len(names) > 1:
-            raise InputError(path, f"holds {len(names)} individuals ({', '.join(names)}); a "
-                             "clip is one hand: keep one individual's columns",
-                             line=line, field="individuals")
-    bodyparts_line, bodyparts = header["bodyparts"]
-    coords_line, coords = header["coords"]
-    columns = list(zip(bodyparts, coords, strict=True))
+def _individual_columns(path: Path, layout: _Layout, spec: ClipSpec) -> np.ndarray:
+    """``(C,) bool``: the data columns of the individual the clip is."""
+    width = len(layout.rows["bodyparts"][1])
+    if "individuals" not in layout.rows:
+        if spec.individual is not None:
+            raise InputError(spec.path, f"names {quoted(spec.individual)}, but "
+                             f"{path.name} has no individuals row (a single-animal file); "
+                             "remove the key", field="individual", clip_id=spec.clip_id)
+        return np.ones(width, dtype=bool)
+    line, cells = layout.rows["individuals"]
+    names = list(dict.fromkeys(cell for cell in cells if cell))
+    if spec.individual is None and len(names) > 1:
+        raise InputError(path, f"holds {len(names)} individuals ({', '.join(names)}); say "
+                         f'which hand this clip is with "individual": "{names[0]}" in '
+                         f"{Path(spec.path).name}, one sidecar per individual",
+                         line=line, field="individuals")
+    chosen = spec.individual if spec.individual is not None else names[0] if names else ""
+    if chosen not in names:
+        raise InputError(spec.path, f"{quoted(chosen)} is not in the individuals row of "
+                         f"{path.name} ({', '.join(names)}); names are case-sensitive",
+                         field="individual", clip_id=spec.clip_id)
+    return np.array([cell == chosen for cell in cells])
+
+
+def _columns(path: Path, layout: _Layout, chosen: np.ndarray) -> list[tuple[str, str]]:
+    """(body part, coordinate) of every chosen data column, validated."""
+    bodyparts_line, bodyparts = layout.rows["bodyparts"]
+    coords_line, coords = layout.rows["coords"]
+    columns = [pair for pair, keep in zip(zip(bodyparts, coords, strict=True), chosen,
+                                          strict=True) if keep]
     for bodypart, coord in columns:
         if coord not in COORDS:
-            raise InputError(path, f"'{coord}' of body part '{bodypart}' is not one of "
-                             f"{', '.join(COORDS)}", line=coords_line, field="coords")
+            raise InputError(path, f"{quoted(coord)} of body part {quoted(bodypart)} is not "
+                             f"one of {', '.join(COORDS)}", line=coords_line, field="coords")
         if columns.count((bodypart, coord)) > 1:
-            raise InputError(path, f"body part '{bodypart}' has two '{coord}' columns",
+            raise InputError(path, f"body part {quoted(bodypart)} has two '{coord}' columns",
                              line=coords_line, field=bodypart)
-    for bodypart in dict.fromkeys(bodyparts):
+    for bodypart in dict.fromkeys(bodypart for bodypart, _ in columns):
         for coord in COORDS[:2]:
             if (bodypart, coord) not in columns:
-                raise InputError(path, f"body part '{bodypart}' has no '{coord}' column",
+                raise InputError(path, f"body part {quoted(bodypart)} has no '{coord}' column",
                                  line=coords_line, field=bodypart)
     if not columns:
         raise InputError(path, "has no body part columns", line=bodyparts_line,
@@ -87,72 +156,112 @@ def _columns(path: Path, header: dict[str, tuple[int, list[str]]]) -> list[tuple
     return columns
 
 
-def _joints(path: Path, bodyparts: list[str], line: int, spec: ClipSpec,
-            skeleton: Skeleton) -> np.ndarray:
-    """Joint index of each body part, ``(P,) int64``."""
-    joints = resolve_joints(bodyparts, spec, skeleton)
-    for bodypart, joint in zip(bodyparts, joints, strict=True):
-        if joint < 0:
-            raise unknown_joint(str(path), bodypart, spec, skeleton, line=line,
-                                field="bodyparts")
-    taken: dict[int, str] = {}
-    for bodypart, joint in zip(bodyparts, joints, strict=True):
-        if joint in taken:
-            raise InputError(path, f"body parts '{taken[joint]}' and '{bodypart}' both map to "
-                             f"joint '{skeleton.joints[joint]}'", line=line, field="bodyparts")
-        taken[joint] = bodypart
-    return joints
+def _image_numbers(table: DelimitedTable, index: list[str]) -> np.ndarray:
+    """Frame numbers from the image file names of labelled data, ``(N,) int64``."""
+    cells = [table.columns[name].to_pylist() for name in index]
+    frames = np.empty(table.n_rows, dtype=np.int64)
+    first_row: dict[int, int] = {}
+    folders: dict[str, int] = {}
+    for row, parts in enumerate(zip(*cells, strict=True)):
+        pieces = re.split(r"[\\/]", "/".join(parts))
+        match = IMAGE_NUMBER.search(pieces[-1])
+        if match is None:
+            raise table.error(row, "frame", f"{quoted(pieces[-1])} has no number in its name; "
+                              'use "frame_from": "row"')
+        folder = pieces[-2] if len(pieces) > 1 else ""
+        folders.setdefault(folder, row)
+        if len(folders) > 1:
+            first = ", ".join(quoted(f) for f in folders)
+            raise table.error(row, "frame", f"images come from more than one video folder "
+                              f"({first}); a clip is one video: split the file")
+        frames[row] = int(match.group(1))
+        if frames[row] in first_row:
+            raise table.error(row, "frame", f"image number {frames[row]} is also on line "
+                              f"{table.line[first_row[frames[row]]]}; keep one row per image")
+        first_row[int(frames[row])] = row
+    span = int(frames.max()) + 1
+    if frames.size < LABELLED_MIN_SHARE * span:
+        row = int(np.argmax(frames))
+        raise table.error(row, "frame", f"the {frames.size} labelled images span {span} frames "
+                          f"of the video (up to image number {frames[row]}): too few to be a "
+                          'track; use "frame_from": "row" to read them as consecutive frames')
+    return frames
+
+
+def _frames(table: DelimitedTable, index: list[str], spec: ClipSpec) -> np.ndarray:
+    """Frame number of every data row, ``(N,) int64``, by the sidecar's ``frame_from``."""
+    frame_from = spec.frame_from or "index"
+    if frame_from == "row":
+        return np.arange(table.n_rows, dtype=np.int64)
+    if frame_from == "image_name":
+        return _image_numbers(table, index)
+    cells = table.columns[index[0]].to_pylist()
+    for row, cell in enumerate(cells):
+        if len(index) > 1 or IMAGE_PATH.search(cell):
+            shown = "\\".join(table.columns[name][row].as_py() for name in index)
+            raise table.error(row, "frame", f"{quoted(shown)} is an image path (DeepLabCut "
+                              'labelled data); add "frame_from": "image_name" (frame = the '
+                              'image\'s number) or "frame_from": "row" to '
+                              f"{Path(spec.path).name}")
+    return table.frames(index[0])
 
 
 def read(path: str | Path, spec: ClipSpec, skeleton: Skeleton) -> Observations:
     """Read a DeepLabCut CSV file.
 
-    Every (data row, body part) becomes a row, its confidence the likelihood (NaN
-    without a likelihood column).
+    Every (data row, body part) of the chosen individual becomes a row, its confidence
+    the likelihood (NaN without a likelihood column, as in labelled data).
 
     Raises
     ------
     InputError
-        Naming the line and the ``bodypart.coord`` column of the first bad cell, or the
-        header row at fault.
+        Naming the line and the ``bodypart.coord`` column of the first bad cell, the
+        header row at fault, or the sidecar key (``individual``, ``frame_from``) to give.
     """
     path = Path(path)
     data = read_bytes(path)
     lines = TextLines.of(data)
-    header = _header(path, data, lines)
-    columns = _columns(path, header)
+    layout = _header(path, data, lines)
+    chosen = _individual_columns(path, layout, spec)
+    columns = _columns(path, layout, chosen)
     bodyparts = list(dict.fromkeys(bodypart for bodypart, _ in columns))
-    bodyparts_line = header["bodyparts"][0]
-    joints = _joints(path, bodyparts, bodyparts_line, spec, skeleton)
-    names = ["frame"] + [f"{bodypart}.{coord}" for bodypart, coord in columns]
-    table = read_delimited(path, data, names=names, header_lines=len(header))
+    bodyparts_line = layout.rows["bodyparts"][0]
+    joints = resolve_names(bodyparts, spec, skeleton, path,
+                           lambda k: (bodyparts_line, "bodyparts"))
+    index = ["frame"] + [f"frame.{k}" for k in range(1, layout.index_columns)]
+    chosen_names = iter(f"{bodypart}.{coord}" for bodypart, coord in columns)
+    names = index + [next(chosen_names) if keep else f"\0{k}" for k, keep in enumerate(chosen)]
+    table = read_delimited(path, data, names=names, header_lines=len(layout.rows))
     if not table.n_rows:
         raise InputError(path, "has header rows but no data rows",
-                         line=header["coords"][0])
-    frame = table.frames("frame")
+                         line=layout.rows["coords"][0])
+    frame = _frames(table, index, spec)
+    kept = [(bodypart, joint) for bodypart, joint in zip(bodyparts, joints, strict=True)
+            if joint >= 0]
 
     def wide(coord: str) -> np.ndarray:
-        """``(N, P)``: ``coord`` of every body part, NaN where empty or absent."""
+        """``(N, P)``: ``coord`` of every kept body part, NaN where empty or absent."""
         return np.stack([table.numbers(f"{bodypart}.{coord}", allow_empty=True)
                          if (bodypart, coord) in columns else np.full(table.n_rows, np.nan)
-                         for bodypart in bodyparts], axis=1)
+                         for bodypart, _ in kept], axis=1)
 
     x, y, likelihood = wide("x"), wide("y"), wide("likelihood")
     source, files = single_file_rows(path, x.size)
     joint_names = list(skeleton.joints)
-    for bodypart, joint in zip(bodyparts, joints, strict=True):
+    for bodypart, joint in kept:
         joint_names[joint] = bodypart
     return Observations(
-        frame=np.repeat(frame, len(bodyparts)),
-        joint=np.tile(joints, table.n_rows),
+        frame=np.repeat(frame, len(kept)),
+        joint=np.tile([joint for _, joint in kept], table.n_rows).astype(np.int64),
         u=x.ravel(),
         v=y.ravel(),
         confidence=likelihood.ravel(),
-        line=np.repeat(table.line, len(bodyparts)),
+        line=np.repeat(table.line, len(kept)),
         source=source,
         files=files,
         skeleton=skeleton,
         n_frames=int(frame.max()) + 1,
+        names=frozenset(bodyparts),
         fields={"u": "{joint}.x", "v": "{joint}.y", "confidence": "{joint}.likelihood"},
         joint_names=tuple(joint_names),
     )
@@ -199,4 +308,5 @@ def write(path: str | Path, uv: np.ndarray, confidence: np.ndarray | None,
     write_csv(path, columns, header)
 
 
-FORMAT = InputFormat(name="dlc", suffix=".dlc.csv", kind="tracks", read=read, write=write)
+FORMAT = InputFormat(name="dlc", suffix=".dlc.csv", kind="tracks", read=read, write=write,
+                     sidecar_keys=("individual", "frame_from"))

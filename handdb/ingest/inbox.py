@@ -4,13 +4,18 @@
 ``<clip_id>.clip.json``, exactly one track file (any registered ``tracks`` format) and at
 most one source of ground truth. Entries that cannot form a clip are refused with an
 :class:`~handdb.errors.InputError` each; entries of other kinds (X-ray tables, marker
-files) are handed over by format name; anything else is ignored. :func:`load_clip` then
-reads one clip into dense arrays.
+files) are handed over by format name; anything else is ignored. An entry is refused
+when it is a symbolic link that leaves the inbox, is not a regular file (a folder where a
+file belongs, a named pipe, a device), or names a clip whose id differs from another's
+only in case; a clip with an entry refused so is refused by that entry alone.
+:func:`load_clip` then reads one clip into dense arrays.
 """
 
 from __future__ import annotations
 
 import hashlib
+import os
+import stat
 from collections import defaultdict
 from collections.abc import Iterator, Mapping
 from dataclasses import dataclass, field
@@ -18,10 +23,18 @@ from pathlib import Path
 
 import numpy as np
 
-from handdb.clip import Clip
+from handdb.clip import Clip, ClipSpec
 from handdb.errors import InputError
 from handdb.hand.skeletons import load_skeleton
-from handdb.ingest.observations import Observations, Positions
+from handdb.ingest.limits import (
+    MAX_COORDINATE_METRES,
+    MAX_PIXEL_COORDINATE,
+    file_kind,
+    folder_files,
+    quoted,
+    visible,
+)
+from handdb.ingest.observations import Observations, Positions, check_joint_map_keys
 from handdb.ingest.registry import (
     CLIP_KINDS,
     DATA_KINDS,
@@ -94,13 +107,60 @@ class InboxScan:
 def _entries(inbox: Path) -> Iterator[tuple[str, str, str, Path]]:
     """Yield ``(kind, format name, clip id, path)`` for every recognised entry."""
     for path in sorted(inbox.iterdir()):
-        if path.name.startswith("."):
+        if not visible(path.name):
             continue
-        if path.name.endswith(SIDECAR_SUFFIX) and path.is_file():
+        if path.name.endswith(SIDECAR_SUFFIX) and len(path.name) > len(SIDECAR_SUFFIX):
             yield SIDECAR, SIDECAR, path.name.removesuffix(SIDECAR_SUFFIX), path
         elif (match := match_format(path)) is not None:
             fmt, clip_id = match
             yield fmt.kind, fmt.name, clip_id, path
+
+
+def _link_refusal(path: Path, inbox: Path) -> InputError | None:
+    """The refusal of a symbolic link ``path`` that leaves ``inbox`` or leads nowhere."""
+    target = path.resolve()
+    if target.is_relative_to(inbox.resolve()) and target.exists():
+        return None
+    shown = os.readlink(path) if path.is_symlink() else str(target)
+    if not target.exists():
+        return InputError(path, f"is a symbolic link to {shown}, which does not exist")
+    return InputError(path, f"is a symbolic link to {shown}, outside the inbox; copy the "
+                      "file into the inbox")
+
+
+def entry_refusal(path: Path, inbox: Path, *, directory: bool) -> InputError | None:
+    """Why the inbox entry ``path`` cannot be read, or ``None`` when it can.
+
+    An entry may be a symbolic link only to something inside the inbox; a file entry
+    must be a regular file, a folder entry a folder whose visible members link nowhere
+    outside the inbox.
+    """
+    refusal = _link_refusal(path, inbox)
+    if refusal is not None:
+        return refusal
+    mode = path.stat().st_mode
+    if directory:
+        members = (member for member in path.iterdir() if visible(member.name))
+        return next((r for member in members if (r := _link_refusal(member, inbox))), None)
+    if not stat.S_ISREG(mode):
+        kind = "a file" if path.name.endswith(SIDECAR_SUFFIX) else "a regular file"
+        return InputError(path, f"is {file_kind(mode)}; an inbox input must be {kind}")
+    return None
+
+
+def _case_collisions(clip_ids: list[str]) -> dict[str, str]:
+    """Each clip id that differs from another only in case -> the message refusing it."""
+    by_folded: dict[str, list[str]] = defaultdict(list)
+    for clip_id in clip_ids:
+        by_folded[clip_id.casefold()].append(clip_id)
+    refused = {}
+    for twins in by_folded.values():
+        if len(twins) > 1:
+            names = " and ".join(quoted(t) for t in sorted(twins))
+            reason = (f"clip ids {names} differ only in case; they collide on file systems "
+                      "that ignore case and in the database folder: rename one")
+            refused.update(dict.fromkeys(twins, reason))
+    return refused
 
 
 def _assemble(clip_id: str, inbox: Path,
@@ -148,6 +208,7 @@ def discover(inbox: str | Path) -> InboxScan:
         lambda: defaultdict(list))
     others: dict[str, list[Path]] = defaultdict(list)
     refused: list[InputError] = []
+    unreadable: set[str] = set()
     for kind, format_name, clip_id, path in _entries(inbox):
         if kind not in (SIDECAR, *CLIP_KINDS):
             others[format_name].append(path)
@@ -157,9 +218,24 @@ def discover(inbox: str | Path) -> InboxScan:
         except InputError as exc:
             refused.append(exc)
             continue
+        directory = kind != SIDECAR and get_format(format_name).directory
+        refusal = entry_refusal(path, inbox, directory=directory)
+        if refusal is not None:
+            refusal.clip_id = clip_id
+            refused.append(refusal)
+            unreadable.add(clip_id)
+            continue
         grouped[clip_id][kind].append((format_name, path))
+    collisions = _case_collisions(list(grouped))
     clips = []
     for clip_id in sorted(grouped):
+        if clip_id in unreadable:
+            continue
+        if clip_id in collisions:
+            refused.extend(InputError(path, collisions[clip_id], field="clip_id",
+                                      clip_id=clip_id)
+                           for entries in grouped[clip_id].values() for _, path in entries)
+            continue
         outcome = _assemble(clip_id, inbox, grouped[clip_id])
         if isinstance(outcome, ClipEntry):
             clips.append(outcome)
@@ -178,12 +254,8 @@ def inbox_relative(path: str | Path, inbox: str | Path) -> str:
 
 
 def _files(path: Path) -> list[Path]:
-    """``path`` itself, or the visible files under the folder ``path`` in name order."""
-    if not path.is_dir():
-        return [path]
-    return sorted(p for p in path.rglob("*")
-                  if p.is_file() and not any(part.startswith(".") for part in
-                                             p.relative_to(path).parts))
+    """``path`` itself, or the files of the folder ``path`` a reader may read."""
+    return folder_files(path) if path.is_dir() else [path]
 
 
 def clip_content_hash(entry: ClipEntry) -> str:
@@ -191,7 +263,9 @@ def clip_content_hash(entry: ClipEntry) -> str:
 
     The sidecar comes first, then the track file (a folder's files in name order), then
     the truth file; each contributes its path relative to the inbox, its size and its
-    bytes, so renaming, editing or moving bytes between files changes the hash.
+    bytes, so renaming, editing or moving bytes between files changes the hash. A folder
+    contributes the files :func:`~handdb.ingest.limits.folder_files` lists, the ones its
+    reader may read.
     """
     digest = hashlib.sha256()
     for path in entry.paths:
@@ -209,6 +283,16 @@ def _dense(rows: Observations | Positions, values: np.ndarray, n_frames: int) ->
     return dense
 
 
+def _check_plausible(spec: ClipSpec, observations: Observations | Positions,
+                     truth: Positions | None, three_d: bool) -> None:
+    """Refuse coordinates no hand can have: beyond the limits of :mod:`handdb.ingest.limits`."""
+    metres = MAX_COORDINATE_METRES / spec.meters_per_unit
+    observations.check_magnitude(metres if three_d else MAX_PIXEL_COORDINATE,
+                                 spec.units if three_d else "px")
+    if truth is not None:
+        truth.check_magnitude(metres, spec.units)
+
+
 def load_clip(entry: ClipEntry, content_hash: str | None = None) -> Clip:
     """Read one clip: sidecar, tracks and ground truth, as dense arrays.
 
@@ -223,19 +307,27 @@ def load_clip(entry: ClipEntry, content_hash: str | None = None) -> Clip:
     """
     try:
         track_format = get_format(entry.track_format)
+        truth_format = get_format(entry.truth_format) if entry.truth_format else None
         three_d = track_format.kind == MARKERS_KIND
-        spec = parse_sidecar(entry.sidecar, entry.clip_id, three_d=three_d)
+        read_by = track_format.sidecar_keys + (truth_format.sidecar_keys if truth_format
+                                               else ())
+        spec = parse_sidecar(entry.sidecar, entry.clip_id, three_d=three_d, read_by=read_by)
         skeleton = load_skeleton(spec.skeleton)
         observations = track_format.read(entry.tracks, spec, skeleton)
         points = observations.xyz if three_d else observations.uv
         if not np.isfinite(points).all(axis=1).any():
             raise InputError(entry.tracks, "holds no point of the hand in any frame")
-        if entry.truth_format is not None:
-            truth_rows = get_format(entry.truth_format).read(entry.truth, spec, skeleton)
+        if truth_format is not None:
+            truth_rows = truth_format.read(entry.truth, spec, skeleton)
         elif track_format.read_truth is not None:
             truth_rows = track_format.read_truth(entry.tracks, spec, skeleton)
         else:
             truth_rows = None
+        _check_plausible(spec, observations, truth_rows, three_d)
+        named = {str(entry.tracks): observations.names}
+        if truth_rows is not None and entry.truth is not None:
+            named[str(entry.truth)] = truth_rows.names
+        check_joint_map_keys(spec, named)
         hash_hex = content_hash or clip_content_hash(entry)
     except InputError as exc:
         exc.clip_id = exc.clip_id or entry.clip_id

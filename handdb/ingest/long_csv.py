@@ -22,12 +22,8 @@ from handdb.ingest.delimited import (
     split_header,
     write_csv,
 )
-from handdb.ingest.observations import (
-    Positions,
-    resolve_joints,
-    single_file_rows,
-    unknown_joint,
-)
+from handdb.ingest.limits import quoted
+from handdb.ingest.observations import Positions, resolve_names, single_file_rows
 
 
 def read_long_csv(path: Path, required: tuple[str, ...],
@@ -47,8 +43,8 @@ def read_long_csv(path: Path, required: tuple[str, ...],
     accepted = ", ".join(required) + "".join(f"[, {name}]" for name in optional)
     for name in header:
         if name not in required + optional:
-            raise InputError(path, f"unknown column '{name}'; the header must be {accepted}",
-                             line=header_line, field=name)
+            raise InputError(path, f"unknown column {quoted(name)}; the header must be "
+                             f"{accepted}", line=header_line, field=name)
         if header.count(name) > 1:
             raise InputError(path, "column named twice in the header", line=header_line,
                              field=name)
@@ -62,23 +58,34 @@ def read_long_csv(path: Path, required: tuple[str, ...],
     return table
 
 
-def joint_column(table: DelimitedTable, column: str, spec: ClipSpec,
-                 skeleton: Skeleton) -> np.ndarray:
-    """Joint index of each row, ``(N,) int64``, from the joint names in ``column``.
+def joint_rows(table: DelimitedTable, column: str, spec: ClipSpec, skeleton: Skeleton,
+               ) -> tuple[DelimitedTable, np.ndarray, frozenset[str]]:
+    """Resolve the joint names in ``column`` and drop the rows of ignored names.
+
+    Names resolve by :func:`~handdb.ingest.observations.resolve_names`; the rows of
+    names the sidecar's ``joint_map`` ignores are dropped before any other check.
+
+    Returns
+    -------
+    table
+        The rows kept.
+    joint
+        ``(N,) int64``, the joint index of each row kept.
+    names
+        Every name in ``column``.
 
     Raises
     ------
     InputError
-        At the first row whose name is neither canonical nor mapped by ``joint_map``.
+        At the first row of a name that is unknown or maps to a joint another name has.
     """
     names, codes = table.dictionary(column)
-    indices = resolve_joints(names, spec, skeleton)
-    unknown = np.flatnonzero(indices[codes] < 0)
-    if unknown.size:
-        row = int(unknown[0])
-        raise unknown_joint(str(table.path), names[codes[row]], spec, skeleton,
-                            line=int(table.line[row]), field=column)
-    return indices[codes]
+    _, first_row = np.unique(codes, return_index=True)
+    indices = resolve_names(names, spec, skeleton, table.path,
+                            lambda k: (int(table.line[first_row[k]]), column))
+    joint = indices[codes]
+    keep = joint >= 0
+    return table.take(keep), joint[keep], frozenset(names)
 
 
 #: Columns of the long-form 3D formats (ground truth, 3D markers).
@@ -93,21 +100,24 @@ def read_positions(path: str | Path, spec: ClipSpec, skeleton: Skeleton) -> Posi
     InputError
         Naming the line and column of the first bad cell: an unknown column, a frame
         that is not a whole number or is negative, an unknown joint, an empty or
-        non-numeric coordinate, a joint given twice in a frame.
+        non-numeric coordinate, a joint given twice in a frame. Rows of names the
+        ``joint_map`` ignores are dropped first.
     """
     path = Path(path)
-    table = read_long_csv(path, POSITION_COLUMNS)
+    table, joint, names = joint_rows(read_long_csv(path, POSITION_COLUMNS), "joint", spec,
+                                     skeleton)
     frame = table.frames("frame")
     source, files = single_file_rows(path, table.n_rows)
     return Positions(
         frame=frame,
-        joint=joint_column(table, "joint", spec, skeleton),
+        joint=joint,
         xyz=np.stack([table.numbers(axis, allow_empty=False) for axis in "xyz"], axis=1),
         line=table.line,
         source=source,
         files=files,
         skeleton=skeleton,
         n_frames=int(frame.max()) + 1,
+        names=names,
     )
 
 

@@ -25,6 +25,7 @@ from handdb.ingest.delimited import (
     read_whitespace_separated,
     write_csv,
 )
+from handdb.ingest.limits import quoted
 from handdb.ingest.observations import Observations, Positions, single_file_rows
 from handdb.ingest.registry import InputFormat
 
@@ -39,8 +40,8 @@ COLUMNS = ("joint", "frame", "x", "y", "z")
 
 
 def _parse(path: Path, spec: ClipSpec, skeleton: Skeleton,
-           ) -> tuple[DelimitedTable, np.ndarray, np.ndarray, np.ndarray]:
-    """Read the export: the table, frames, joint indices and camera-frame points."""
+           ) -> tuple[DelimitedTable, np.ndarray, np.ndarray, np.ndarray, frozenset[str]]:
+    """Read the export: the table, frames, joint indices, camera-frame points, point ids."""
     if skeleton.name != SKELETON:
         raise InputError(spec.path, f"a Maya export numbers the feature points of "
                          f"'{SKELETON}'; set the sidecar's skeleton to it",
@@ -52,11 +53,12 @@ def _parse(path: Path, spec: ClipSpec, skeleton: Skeleton,
     unknown = np.flatnonzero(indices[codes] < 0)
     if unknown.size:
         row = int(unknown[0])
-        raise table.error(row, "joint", f"'{tokens[codes[row]]}' is not a feature point: "
+        raise table.error(row, "joint", f"{quoted(tokens[codes[row]])} is not a feature point: "
                           f"write j<id> with an id of {SKELETON} "
                           f"({min(skeleton.ids)}-{max(skeleton.ids)})")
     maya = np.stack([table.numbers(axis, allow_empty=False) for axis in "xyz"], axis=1)
-    return table, table.frames("frame"), indices[codes], maya * MAYA_TO_CAMERA
+    return (table, table.frames("frame"), indices[codes], maya * MAYA_TO_CAMERA,
+            frozenset(tokens))
 
 
 def read(path: str | Path, spec: ClipSpec, skeleton: Skeleton) -> Observations:
@@ -69,12 +71,12 @@ def read(path: str | Path, spec: ClipSpec, skeleton: Skeleton) -> Observations:
         if it is not ``thesis21``.
     """
     path = Path(path)
-    table, frame, joint, points = _parse(path, spec, skeleton)
+    table, frame, joint, points, names = _parse(path, spec, skeleton)
     source, files = single_file_rows(path, table.n_rows)
     return Observations(
         frame=frame, joint=joint, u=points[:, 0], v=points[:, 1],
         confidence=np.full(table.n_rows, np.nan), line=table.line, source=source,
-        files=files, skeleton=skeleton, n_frames=int(frame.max()) + 1,
+        files=files, skeleton=skeleton, n_frames=int(frame.max()) + 1, names=names,
         fields={"u": "x", "v": "y"},
     )
 
@@ -82,11 +84,11 @@ def read(path: str | Path, spec: ClipSpec, skeleton: Skeleton) -> Observations:
 def read_truth(path: str | Path, spec: ClipSpec, skeleton: Skeleton) -> Positions:
     """Read the ground truth of a Maya export: camera-frame ``(x, -y, -z)``."""
     path = Path(path)
-    table, frame, joint, points = _parse(path, spec, skeleton)
+    table, frame, joint, points, names = _parse(path, spec, skeleton)
     source, files = single_file_rows(path, table.n_rows)
     return Positions(
         frame=frame, joint=joint, xyz=points, line=table.line, source=source, files=files,
-        skeleton=skeleton, n_frames=int(frame.max()) + 1,
+        skeleton=skeleton, n_frames=int(frame.max()) + 1, names=names,
     )
 
 

@@ -9,7 +9,7 @@ first bad row, so a reader never hands on half-valid data.
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Collection, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -18,37 +18,114 @@ import numpy as np
 from handdb.clip import ClipSpec
 from handdb.errors import InputError
 from handdb.hand.skeletons import Skeleton
+from handdb.ingest.limits import MAX_FRAMES, frame_limit_reason, is_sparse, quoted
+from handdb.ingest.sidecar import IGNORE_OTHERS
+
+#: A function giving the 1-based line (or ``None``) and the field where a file's ``k``-th
+#: name is written, for messages about that name.
+Locate = Callable[[int], tuple[int | None, str]]
 
 
-def joint_lookup(spec: ClipSpec, skeleton: Skeleton) -> dict[str, int]:
-    """Map every name a source may use for a joint to the joint's index.
-
-    A source names a joint by its canonical name or by a tool name the sidecar's
-    ``joint_map`` maps to a canonical name.
-    """
-    lookup = {name: i for i, name in enumerate(skeleton.joints)}
-    lookup.update({tool: skeleton.index(canonical) for tool, canonical in spec.joint_map.items()})
-    return lookup
+def _map_text(spec: ClipSpec) -> str:
+    entries = [f"{k} to {'null' if v is None else v}" for k, v in spec.joint_map.items()]
+    shown = ", ".join(entries[:8]) + (", ..." if len(entries) > 8 else "")
+    return f"; the sidecar's joint_map maps {shown}" if entries else ""
 
 
-def unknown_joint(file: str, name: str, spec: ClipSpec, skeleton: Skeleton, *,
+def unknown_joint(file: str | Path, name: str, spec: ClipSpec, skeleton: Skeleton, *,
                   line: int | None = None, field: str = "joint") -> InputError:
-    """Return the error for a joint name that is neither canonical nor in the ``joint_map``."""
-    mapped = (f"; the sidecar's joint_map maps {', '.join(sorted(spec.joint_map))}"
-              if spec.joint_map else "")
+    """Return the error for a name that is neither canonical nor a ``joint_map`` key."""
     return InputError(
         file,
-        f"unknown joint '{name}': skeleton '{skeleton.name}' knows "
-        f"{', '.join(skeleton.joints)}{mapped}. Rename it, or map it to one of these in "
-        "the sidecar's joint_map",
+        f"unknown joint {quoted(name)}: skeleton '{skeleton.name}' knows "
+        f"{', '.join(skeleton.joints)}{_map_text(spec)}. Rename it, or map it in the "
+        f"sidecar's joint_map to one of these, to null to ignore it, or add "
+        f'"{IGNORE_OTHERS}": null to ignore every unmapped name',
         line=line, field=field, clip_id=spec.clip_id,
     )
 
 
-def resolve_joints(names: Sequence[str], spec: ClipSpec, skeleton: Skeleton) -> np.ndarray:
-    """Joint index of each name, ``(K,) int64``; ``-1`` for names nothing maps."""
-    lookup = joint_lookup(spec, skeleton)
-    return np.array([lookup.get(name, -1) for name in names], dtype=np.int64)
+def resolve_names(names: Sequence[str], spec: ClipSpec, skeleton: Skeleton,
+                  file: str | Path, locate: Locate, *, fixed: bool = False) -> np.ndarray:
+    """Joint index of each distinct name of a file, by the one ``joint_map`` rule.
+
+    A name that is a key of the sidecar's ``joint_map`` is its value: a joint, or ignored
+    (``null``). Any other canonical name is that joint. Any other name is ignored when
+    the map has ``"*": null``, and refused otherwise. Formats with a fixed joint order
+    (``fixed``: OpenPose, MediaPipe, ...) name joints canonically; those the skeleton
+    lacks are dropped rather than refused.
+
+    Parameters
+    ----------
+    names
+        The file's distinct names, ``K`` of them.
+    spec, skeleton
+        The sidecar and its skeleton.
+    file
+        The file, for messages.
+    locate
+        ``locate(k)``: line and field where ``names[k]`` is written.
+    fixed
+        Whether the names are a fixed-order format's canonical names.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(K,) int64`` joint indices, ``-1`` for ignored names.
+
+    Raises
+    ------
+    InputError
+        For an unknown name, two names mapped to one joint, or a file whose every name
+        is ignored.
+    """
+    joint_map = spec.joint_map
+    ignore_others = IGNORE_OTHERS in joint_map or fixed
+    indices = np.full(len(names), -1, dtype=np.int64)
+    taken: dict[int, int] = {}
+    for k, name in enumerate(names):
+        canonical = joint_map.get(name, name if name in skeleton.joints else None)
+        if canonical is None:
+            if name not in joint_map and not ignore_others:
+                line, field = locate(k)
+                raise unknown_joint(file, name, spec, skeleton, line=line, field=field)
+            continue
+        joint = skeleton.index(canonical)
+        if joint in taken:
+            line, field = locate(k)
+            raise InputError(file, f"{quoted(names[taken[joint]])} and {quoted(name)} both "
+                             f"map to joint '{canonical}'; map one of them to null, or to "
+                             "another joint", line=line, field=field, clip_id=spec.clip_id)
+        taken[joint] = k
+        indices[k] = joint
+    if names and not taken:
+        line, field = locate(0)
+        shown = ", ".join(quoted(n) for n in names[:8]) + (", ..." if len(names) > 8 else "")
+        raise InputError(file, f"none of its names ({shown}) is a joint of skeleton "
+                         f"'{skeleton.name}' once the sidecar's joint_map is applied",
+                         line=line, field=field, clip_id=spec.clip_id)
+    return indices
+
+
+def check_joint_map_keys(spec: ClipSpec, named: Mapping[str, Collection[str]]) -> None:
+    """Refuse ``joint_map`` keys that none of the clip's files names (a typo guard).
+
+    ``named`` maps each of the clip's files to the names it holds.
+
+    Raises
+    ------
+    InputError
+        Naming the sidecar and ``joint_map``.
+    """
+    every = set().union(*named.values()) if named else set()
+    for key in spec.joint_map:
+        if key != IGNORE_OTHERS and key not in every:
+            files = " or ".join(Path(f).name for f in named)
+            held = sorted(every)
+            shown = ", ".join(quoted(n) for n in held[:12]) + (", ..." if len(held) > 12
+                                                              else "")
+            raise InputError(spec.path, f"maps {quoted(key)}, which {files} does not name "
+                             f"(it names {shown})", field="joint_map", clip_id=spec.clip_id)
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -62,6 +139,7 @@ class _Rows:
     files: tuple[str, ...]
     skeleton: Skeleton
     n_frames: int
+    names: frozenset[str]
     fields: Mapping[str, str] = field(default_factory=dict)
     joint_names: tuple[str, ...] = ()
 
@@ -101,8 +179,14 @@ class _Rows:
             row = negative[0]
             raise self.error(row, "frame", f"frame {self.frame[row]} is negative; "
                              "frames count from 0")
+        beyond = np.flatnonzero(self.frame >= MAX_FRAMES)
+        if beyond.size:
+            raise self.error(beyond[0], "frame", frame_limit_reason(int(self.frame[beyond[0]])))
         if n and self.n_frames <= self.frame.max():
             raise ValueError("n_frames must exceed every frame number")
+        if self.n_frames > MAX_FRAMES:
+            raise ValueError(f"n_frames must not exceed MAX_FRAMES ({MAX_FRAMES})")
+        self._check_dense()
         key = self.frame * self.skeleton.n_joints + self.joint
         order = np.argsort(key, kind="stable")
         repeated = np.flatnonzero(key[order][1:] == key[order][:-1])
@@ -115,6 +199,37 @@ class _Rows:
                 again, "frame",
                 f"frame {self.frame[row]} joint '{self.skeleton.joints[self.joint[row]]}' "
                 f"is given twice, here and at {self.where(row)}; keep one of them")
+
+    def _check_dense(self) -> None:
+        """Refuse frame numbers that are mostly invented (see ``limits.is_sparse``)."""
+        n_filled = np.unique(self.frame).size
+        if self.n_rows and is_sparse(n_filled, self.n_frames):
+            row = int(np.argmax(self.frame))
+            raise self.error(
+                row, "frame",
+                f"frame {self.frame[row]} makes a clip of {self.n_frames:,} frames of which "
+                f"only {n_filled} carry a point; number the frames from the clip's start "
+                "(is this frame number a typo, or an id of a dataset's image?)")
+
+    def _coordinates(self) -> dict[str, np.ndarray]:
+        """The rows' coordinates by generic field name, ``(N,)`` each."""
+        raise NotImplementedError
+
+    def check_magnitude(self, limit: float, unit: str) -> None:
+        """Refuse any coordinate whose magnitude exceeds ``limit`` (in ``unit``).
+
+        Raises
+        ------
+        InputError
+            At the first such coordinate, naming its row and field.
+        """
+        values = self._coordinates()
+        arrays = np.stack(list(values.values()), axis=1)
+        beyond = np.argwhere(np.abs(arrays) > limit)
+        if beyond.size:
+            row, col = beyond[0]
+            raise self.error(row, list(values)[col], f"{arrays[row, col]:g} {unit} is not a "
+                             f"plausible coordinate (limit {limit:g} {unit})")
 
     def _check_not_infinite(self, values: dict[str, np.ndarray]) -> None:
         arrays = np.stack(list(values.values()), axis=1)
@@ -150,6 +265,9 @@ class Observations(_Rows):
         The skeleton ``joint`` indexes.
     n_frames
         Number of frames the source spans (frames without points included).
+    names
+        Every joint name the file holds, those the ``joint_map`` ignores included (for
+        :func:`check_joint_map_keys`).
     fields
         The source's names of the generic columns (``frame``, ``joint``, ``u``, ``v``,
         ``confidence``) where they differ; ``{joint}`` in a name stands for the joint.
@@ -186,14 +304,18 @@ class Observations(_Rows):
         """``(N, 2) float64`` pixels."""
         return np.stack([self.u, self.v], axis=1)
 
+    def _coordinates(self) -> dict[str, np.ndarray]:
+        return {"u": self.u, "v": self.v}
+
 
 @dataclass(frozen=True, kw_only=True)
 class Positions(_Rows):
     """3D ground-truth points of one clip in long form, one row per (frame, joint).
 
     Attributes are those of :class:`Observations` without ``u, v, confidence`` and with
-    ``xyz``: ``(N, 3) float64`` in the clip's units, camera frame (x right, y down,
-    z away from the camera), every value finite.
+    ``xyz``: ``(N, 3) float64`` in the clip's units, every value finite: camera frame
+    (x right, y down, z away from the camera) for ground truth, the capture's frame for
+    3D markers.
     """
 
     xyz: np.ndarray
@@ -208,6 +330,9 @@ class Positions(_Rows):
             row, axis = missing[0]
             raise self.error(row, "xyz"[axis], "is empty; ground truth rows need x, y and z "
                              "(leave out the row of a joint without ground truth)")
+
+    def _coordinates(self) -> dict[str, np.ndarray]:
+        return dict(zip("xyz", self.xyz.T, strict=True))
 
 
 def single_file_rows(path: str | Path, n: int) -> tuple[np.ndarray, tuple[str, ...]]:

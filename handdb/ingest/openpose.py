@@ -2,26 +2,40 @@
 
 The folder holds one ``<name>_<frame>_keypoints.json`` file per frame; the frame number
 is the run of digits before ``_keypoints.json``. Each file is
-``{"people": [{"hand_right_keypoints_2d": [x0, y0, c0, x1, y1, c1, ...], ...}, ...]}``:
-handdb reads the first person's hand on the sidecar's side, 21 points of ``x, y, c``
-(pixels and confidence) in OpenPose's hand order, which is the ``mediapipe21`` order. A
-point ``0, 0, 0`` is missing; a file with no people, or whose first person's hand array
-is empty, is a frame with every point missing. Other files in the folder are ignored.
+``{"people": [{"person_id": [-1], "hand_right_keypoints_2d": [x0, y0, c0, ...], ...}]}``:
+handdb reads one person's hand on the sidecar's side, 21 points of ``x, y, c`` in
+OpenPose's hand order, which is the ``mediapipe21`` order. A point ``0, 0, 0`` is
+missing; a file with no people, or whose person's hand array is empty, is a frame with
+every point missing. Hidden files (``._name`` of macOS included), sub-folders and other
+files are ignored, as by the clip's content hash.
+
+Which person: the sidecar's ``person``, an index into ``people`` (only when every file
+with people has the same number of them: OpenPose orders people per frame) or
+``{"id": n}``, the ``person_id`` OpenPose's tracking gives (a frame without it has every
+point missing). Without ``person`` no file may hold more than one person.
+
+Coordinates are pixels unless the sidecar's ``coordinates`` says ``"normalized"``
+([0, 1], ``--keypoint_scale 3``) or ``"normalized_signed"`` ([-1, 1],
+``--keypoint_scale 4``), which need the sidecar's ``image``. A clip whose every keypoint
+lies within [-1, 1] while said to be pixels is refused.
 """
 
 from __future__ import annotations
 
 import json
 import re
+from collections.abc import Sequence
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
 from handdb.clip import ClipSpec
 from handdb.errors import InputError
 from handdb.hand.skeletons import Skeleton, correspondence, load_skeleton
-from handdb.ingest.jsondoc import load_json, number_array
-from handdb.ingest.observations import Observations
+from handdb.ingest.jsondoc import load_json, number_array, preview
+from handdb.ingest.limits import MAX_FRAMES, folder_files, frame_limit_reason
+from handdb.ingest.observations import Observations, resolve_names
 from handdb.ingest.registry import InputFormat
 
 #: OpenPose's hand keypoints in order: the ``mediapipe21`` joints.
@@ -35,19 +49,32 @@ HAND_KEYS = {"right": "hand_right_keypoints_2d", "left": "hand_left_keypoints_2d
 
 KEYPOINT_FILE = re.compile(r"(\d+)_keypoints\.json$")
 
+#: Keypoints all within this magnitude are normalised coordinates, not pixels.
+NORMALISED_BOUND = 1.0
+
 
 def frame_files(folder: Path) -> list[tuple[int, Path]]:
     """Return the keypoint files of ``folder`` with their frame numbers, by frame.
 
+    Only the files :func:`~handdb.ingest.limits.folder_files` lists count.
+
     Raises
     ------
     InputError
-        If the folder has no keypoint files or two files carry the same frame number.
+        If the folder has no keypoint files, a frame number is beyond
+        :data:`~handdb.ingest.limits.MAX_FRAMES`, or two files carry the same frame
+        number.
     """
-    numbered = sorted(
-        (int(match.group(1)), path) for path in folder.iterdir()
-        if path.is_file() and (match := KEYPOINT_FILE.search(path.name))
-    )
+    numbered = []
+    for path in folder_files(folder):
+        match = KEYPOINT_FILE.search(path.name)
+        if match is None:
+            continue
+        digits = match.group(1).lstrip("0") or "0"
+        if len(digits) > len(str(MAX_FRAMES)) or int(digits) >= MAX_FRAMES:
+            raise InputError(path, frame_limit_reason(match.group(1)), field="frame")
+        numbered.append((int(digits), path))
+    numbered.sort()
     if not numbered:
         raise InputError(folder, "holds no '<name>_<frame>_keypoints.json' files")
     for (frame, first), (next_frame, second) in zip(numbered, numbered[1:], strict=False):
@@ -57,24 +84,90 @@ def frame_files(folder: Path) -> list[tuple[int, Path]]:
     return numbered
 
 
-def hand_keypoints(path: Path, hand: str) -> np.ndarray | None:
-    """Return the first person's hand keypoints in one file, ``(21, 3)`` x, y, c.
-
-    ``None`` when the file has no people or the person's hand array is empty.
-    """
+def _people(path: Path) -> list[dict[str, Any]]:
+    """The ``people`` of one keypoint file, each checked to be an object."""
     doc = load_json(path)
     people = doc.get("people") if isinstance(doc, dict) else None
     if not isinstance(people, list):
         raise InputError(path, "needs a 'people' list (OpenPose --write_json output)",
                          field="people")
-    if not people:
-        return None
+    for k, person in enumerate(people):
+        if not isinstance(person, dict):
+            raise InputError(path, f"must be an object, got {preview(person)}",
+                             field=f"people[{k}]")
+    return people
+
+
+def _person_id(person: dict[str, Any]) -> int | None:
+    """The tracked id of a person (``person_id`` ``[n]`` or ``n``), ``None`` if absent."""
+    value = person.get("person_id")
+    if isinstance(value, list) and len(value) == 1:
+        value = value[0]
+    return value if isinstance(value, int) and not isinstance(value, bool) else None
+
+
+def _select(people_by_file: Sequence[tuple[Path, list[dict[str, Any]]]], spec: ClipSpec,
+            ) -> list[int | None]:
+    """The index in each file's ``people`` of the clip's person (``None``: not there)."""
+    sidecar = Path(spec.path).name
+    if spec.person_id is not None:
+        chosen = []
+        for path, people in people_by_file:
+            hits = [k for k, person in enumerate(people) if _person_id(person) == spec.person_id]
+            if len(hits) > 1:
+                raise InputError(path, f"holds person id {spec.person_id} twice",
+                                 field=f"people[{hits[1]}].person_id")
+            chosen.append(hits[0] if hits else None)
+        if all(index is None for index in chosen):
+            ids = sorted({str(_person_id(person)) for _, people in people_by_file
+                          for person in people})
+            raise InputError(spec.path, f"selects person id {spec.person_id}, which no file "
+                             f"of the folder holds (its ids: {', '.join(ids) or 'none'}; -1 "
+                             "means OpenPose ran without --tracking: select by index)",
+                             field="person", clip_id=spec.clip_id)
+        return chosen
+    counts = [(path, len(people)) for path, people in people_by_file if people]
+    if spec.person is None:
+        crowded = next(((path, n) for path, n in counts if n > 1), None)
+        if crowded is not None:
+            path, n = crowded
+            raise InputError(path, f"holds {n} people; say which one with \"person\": <index> "
+                             f'(0 to {n - 1}) or "person": {{"id": n}} in {sidecar}',
+                             field="people")
+        return [0 if people else None for _, people in people_by_file]
+    for path, n in counts[1:]:
+        first, n_first = counts[0]
+        if n != n_first:
+            here = f"{n} {'person' if n == 1 else 'people'}"
+            raise InputError(path, f"{here} here but {n_first} in {first.name}; the order "
+                             "of people is not stable across frames, select by "
+                             '"person": {"id": n} (run OpenPose with --tracking 1) or split '
+                             "the folder", field="people")
+    if counts and spec.person >= counts[0][1]:
+        path, n = counts[0]
+        raise InputError(spec.path, f"is {spec.person}, but {path.name} holds {n} "
+                         f"{'person' if n == 1 else 'people'}", field="person",
+                         clip_id=spec.clip_id)
+    return [spec.person if people else None for _, people in people_by_file]
+
+
+def hand_keypoints(path: Path, person: dict[str, Any], index: int, hand: str
+                   ) -> np.ndarray | None:
+    """Return one person's hand keypoints, ``(21, 3)`` x, y, c.
+
+    ``None`` when the person's hand array is empty.
+
+    Raises
+    ------
+    InputError
+        If the person has no array for the hand, or it is not 63 finite numbers.
+    """
     key = HAND_KEYS[hand]
-    field = f"people[0].{key}"
-    if not isinstance(people[0], dict) or key not in people[0]:
-        raise InputError(path, f"the first person has no {hand} hand keypoints; run OpenPose "
+    field = f"people[{index}].{key}"
+    if key not in person:
+        raise InputError(path, f"people[{index}] has no {hand} hand keypoints; run OpenPose "
                          "with --hand, or set the sidecar's hand", field=field)
-    values = people[0][key]
+    values = person[key]
     if values == []:
         return None
     if not isinstance(values, list):
@@ -89,33 +182,65 @@ def hand_keypoints(path: Path, hand: str) -> np.ndarray | None:
         n_points, VALUES_PER_POINT)
 
 
+def _to_pixels(xy: np.ndarray, missing: np.ndarray, spec: ClipSpec,
+               folder: Path) -> np.ndarray:
+    """Keypoints ``(F, 21, 2)`` as pixels by the sidecar's ``coordinates``; NaN if missing."""
+    system = spec.coordinates or "pixels"
+    if system == "pixels":
+        present = xy[~missing]
+        if present.size and (np.abs(present) <= NORMALISED_BOUND).all():
+            raise InputError(folder, "every keypoint lies within [-1, 1]: OpenPose was run "
+                             "with --keypoint_scale 3 or 4; add \"coordinates\": \"normalized\" "
+                             '(or "normalized_signed" for [-1, 1]) and "image": {"width": W, '
+                             f'"height": H}} to {Path(spec.path).name}')
+        pixels = xy
+    else:
+        if spec.image_width is None or spec.image_height is None:
+            raise InputError(spec.path, f'"coordinates": "{system}" needs the image size: '
+                             'add "image": {"width": W, "height": H} (pixels)', field="image",
+                             clip_id=spec.clip_id)
+        size = np.array([spec.image_width, spec.image_height], dtype=np.float64)
+        pixels = (xy + 1.0) / 2.0 * size if system == "normalized_signed" else xy * size
+    return np.where(missing[..., None], np.nan, pixels)
+
+
 def read(path: str | Path, spec: ClipSpec, skeleton: Skeleton) -> Observations:
     """Read an OpenPose JSON folder.
 
-    Every keypoint of a frame with a person becomes a row; keypoints of joints that
-    ``skeleton`` lacks are dropped.
+    Every keypoint of a frame with the clip's person becomes a row; keypoints of joints
+    that ``skeleton`` lacks, or that the ``joint_map`` maps to null, are dropped.
 
     Raises
     ------
     InputError
-        Naming the frame's file and the keypoint array at fault.
+        Naming the frame's file and the keypoint array at fault, or the sidecar key
+        (``person``, ``coordinates``, ``image``) to give.
     """
     folder = Path(path)
     numbered = frame_files(folder)
-    with_hand = [(i, frame, points) for i, (frame, file) in enumerate(numbered)
-                 if (points := hand_keypoints(file, spec.hand)) is not None]
+    people_by_file = [(file, _people(file)) for _, file in numbered]
+    chosen = _select(people_by_file, spec)
+    with_hand = [(i, frame, index, points) for i, ((frame, file), (_, people), index)
+                 in enumerate(zip(numbered, people_by_file, chosen, strict=True))
+                 if index is not None
+                 and (points := hand_keypoints(file, people[index], index, spec.hand))
+                 is not None]
     hand = load_skeleton(HAND_SKELETON)
-    kept, joint = correspondence(hand, skeleton)
-    points = np.array([p for _, _, p in with_hand]).reshape(
+    joints = resolve_names(hand.joints, spec, skeleton, folder,
+                           lambda k: (None, HAND_KEYS[spec.hand]), fixed=True)
+    kept = np.flatnonzero(joints >= 0)
+    points = np.array([p for *_, p in with_hand]).reshape(
         -1, hand.n_joints, VALUES_PER_POINT)[:, kept]
     missing = (points == 0).all(axis=-1)
-    uv = np.where(missing[..., None], np.nan, points[..., :2])
-    n_files = np.array([i for i, _, _ in with_hand], dtype=np.int64)
-    frames = np.array([frame for _, frame, _ in with_hand], dtype=np.int64)
+    uv = _to_pixels(points[..., :2], missing, spec, folder)
+    n_files = np.array([i for i, *_ in with_hand], dtype=np.int64)
+    frames = np.array([frame for _, frame, *_ in with_hand], dtype=np.int64)
     key = HAND_KEYS[spec.hand]
+    person = (f"people[{spec.person or 0}]" if spec.person_id is None
+              else f"people[person_id={spec.person_id}]")
     return Observations(
         frame=np.repeat(frames, kept.size),
-        joint=np.tile(joint, len(with_hand)),
+        joint=np.tile(joints[kept], len(with_hand)),
         u=uv[..., 0].ravel(),
         v=uv[..., 1].ravel(),
         confidence=points[..., 2].ravel(),
@@ -124,8 +249,9 @@ def read(path: str | Path, spec: ClipSpec, skeleton: Skeleton) -> Observations:
         files=tuple(str(file) for _, file in numbered),
         skeleton=skeleton,
         n_frames=numbered[-1][0] + 1,
-        fields={name: f"people[0].{key}[{{joint}}].{name[0]}" for name in ("u", "v")}
-        | {"confidence": f"people[0].{key}[{{joint}}].c"},
+        names=frozenset(hand.joints),
+        fields={name: f"{person}.{key}[{{joint}}].{name[0]}" for name in ("u", "v")}
+        | {"confidence": f"{person}.{key}[{{joint}}].c"},
     )
 
 
@@ -168,4 +294,5 @@ def write(path: str | Path, uv: np.ndarray, confidence: np.ndarray | None,
 
 
 FORMAT = InputFormat(name="openpose", suffix=".openpose", kind="tracks", read=read,
-                     write=write, directory=True)
+                     write=write, directory=True,
+                     sidecar_keys=("person", "coordinates"))

@@ -63,6 +63,9 @@ class InputFormat:
     read_truth
         For track formats that also carry ground truth (the thesis's Maya export):
         ``read_truth(path, spec, skeleton) -> Positions``; ``None`` otherwise.
+    sidecar_keys
+        The reader options of the sidecar (:data:`handdb.ingest.sidecar.READER_KEYS`) this
+        format reads; a sidecar giving another is refused.
     """
 
     name: str
@@ -72,6 +75,7 @@ class InputFormat:
     write: Callable[..., Any] | None = None
     directory: bool = False
     read_truth: Callable[..., Any] | None = None
+    sidecar_keys: tuple[str, ...] = ()
 
 
 #: Every input format by name, filled in :mod:`handdb.ingest`.

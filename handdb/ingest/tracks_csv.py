@@ -16,7 +16,7 @@ import pyarrow as pa
 from handdb.clip import ClipSpec
 from handdb.hand.skeletons import Skeleton
 from handdb.ingest.delimited import write_csv
-from handdb.ingest.long_csv import joint_column, read_long_csv
+from handdb.ingest.long_csv import joint_rows, read_long_csv
 from handdb.ingest.observations import Observations, single_file_rows
 from handdb.ingest.registry import InputFormat
 
@@ -30,7 +30,8 @@ def read(path: str | Path, spec: ClipSpec, skeleton: Skeleton) -> Observations:
     Returns
     -------
     Observations
-        One row per row of the file, in file order.
+        One row per row of the file, in file order, but for rows of names the sidecar's
+        ``joint_map`` ignores.
 
     Raises
     ------
@@ -38,14 +39,15 @@ def read(path: str | Path, spec: ClipSpec, skeleton: Skeleton) -> Observations:
         Naming the line and column of the first bad cell.
     """
     path = Path(path)
-    table = read_long_csv(path, COLUMNS, OPTIONAL_COLUMNS)
+    table, joint, names = joint_rows(read_long_csv(path, COLUMNS, OPTIONAL_COLUMNS), "joint",
+                                     spec, skeleton)
     frame = table.frames("frame")
     confidence = (table.numbers("confidence", allow_empty=True)
                   if "confidence" in table.columns else np.full(table.n_rows, np.nan))
     source, files = single_file_rows(path, table.n_rows)
     return Observations(
         frame=frame,
-        joint=joint_column(table, "joint", spec, skeleton),
+        joint=joint,
         u=table.numbers("u", allow_empty=True),
         v=table.numbers("v", allow_empty=True),
         confidence=confidence,
@@ -54,6 +56,7 @@ def read(path: str | Path, spec: ClipSpec, skeleton: Skeleton) -> Observations:
         files=files,
         skeleton=skeleton,
         n_frames=int(frame.max()) + 1,
+        names=names,
     )
 
 

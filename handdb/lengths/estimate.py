@@ -22,7 +22,6 @@ inverse variance in log length (lengths are positive and their errors relative):
 
 from __future__ import annotations
 
-import warnings
 from dataclasses import dataclass
 from functools import cache
 
@@ -133,9 +132,7 @@ def running_median(values: np.ndarray, frames: int) -> np.ndarray:
     padded = np.pad(values, ((half, half), (0, 0)), constant_values=np.nan)
     windows = np.lib.stride_tricks.sliding_window_view(padded, frames, axis=0)
     enough = np.isfinite(windows).sum(axis=-1) * 2 >= frames
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", RuntimeWarning)  # all-NaN windows stay NaN
-        median = np.nanmedian(windows, axis=-1)
+    median = np.nanmedian(np.where(enough[..., None], windows, 0.0), axis=-1)
     return np.where(enough & np.isfinite(values), median, np.nan)
 
 

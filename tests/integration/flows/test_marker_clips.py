@@ -33,7 +33,9 @@ def built(tmp_path_factory):
         (inbox / f"{clip_id}.clip.json").write_text(json.dumps(
             {"skeleton": "mediapipe21", "hand": "right", "fps": 30, "subject": "s9",
              "units": "mm"}))
-        get_format(fmt).write(inbox / f"{clip_id}{get_format(fmt).suffix}", markers, skeleton)
+        rate = {"point_rate": 30.0} if fmt == "c3d" else {}
+        get_format(fmt).write(inbox / f"{clip_id}{get_format(fmt).suffix}", markers, skeleton,
+                              **rate)
         get_format("truth_csv").write(inbox / f"{clip_id}.truth.csv", clip.xyz, skeleton)
         truth[clip_id] = clip.xyz
     db = root / "db"

@@ -20,7 +20,7 @@ def test_c3d_round_trip_converts_units(tmp_path):
 
 
 def write_labelled(path, labels, n_frames=3, units="mm"):
-    writer = c3d.Writer(point_rate=100.0, point_units=units)
+    writer = c3d.Writer(point_rate=120.0, point_units=units)
     writer.set_point_labels(labels)
     frames = np.zeros((n_frames, len(labels), 5), dtype=np.float32)
     frames[..., :3] = np.arange(len(labels) * 3).reshape(len(labels), 3)
@@ -30,25 +30,33 @@ def write_labelled(path, labels, n_frames=3, units="mm"):
     return path
 
 
-def test_labels_are_mapped_by_the_joint_map_and_extras_ignored(tmp_path):
+@pytest.mark.parametrize("joint_map", [{"RWRA": "wrist", "STERNUM": None},
+                                       {"RWRA": "wrist", "*": None}])
+def test_labels_are_mapped_by_the_joint_map_and_extras_ignored_by_name(tmp_path, joint_map):
     path = write_labelled(tmp_path / "m01.c3d", ["RWRA", "index_tip", "STERNUM"])
-    spec = marker_spec(joint_map={"RWRA": "wrist"})
-    markers = dense_markers(c3d_reader.read(path, spec, SKELETON))
+    markers = dense_markers(c3d_reader.read(path, marker_spec(joint_map=joint_map), SKELETON))
     np.testing.assert_allclose(markers[:, SKELETON.index("wrist")], [[0, 1, 2]] * 3)
     np.testing.assert_allclose(markers[:, SKELETON.index("index_tip")], [[3, 4, 5]] * 3)
     assert np.isnan(markers[:, SKELETON.index("thumb_tip")]).all()
 
 
-def test_c3d_without_known_labels_names_the_joint_map(tmp_path):
+def test_an_unmapped_label_is_refused_as_in_every_format(tmp_path):
+    path = write_labelled(tmp_path / "m01.c3d", ["RWRA", "index_tip", "STERNUM"])
+    with pytest.raises(InputError, match="unknown joint 'STERNUM'.*null") as caught:
+        c3d_reader.read(path, marker_spec(joint_map={"RWRA": "wrist"}), SKELETON)
+    assert (caught.value.field, caught.value.line) == ("POINT:LABELS", None)
+
+
+def test_c3d_whose_every_label_is_ignored_is_refused(tmp_path):
     path = write_labelled(tmp_path / "m01.c3d", ["A", "B"])
-    with pytest.raises(InputError, match="no point label") as caught:
-        c3d_reader.read(path, marker_spec(), SKELETON)
-    assert caught.value.field == "joint_map"
+    with pytest.raises(InputError, match="none of its names") as caught:
+        c3d_reader.read(path, marker_spec(joint_map={"*": None}), SKELETON)
+    assert caught.value.field == "POINT:LABELS"
 
 
 def test_two_labels_for_one_joint_are_refused(tmp_path):
     path = write_labelled(tmp_path / "m01.c3d", ["wrist", "WRIST2"])
-    with pytest.raises(InputError, match="two point labels"):
+    with pytest.raises(InputError, match="'wrist' and 'WRIST2' both map to joint 'wrist'"):
         c3d_reader.read(path, marker_spec(joint_map={"WRIST2": "wrist"}), SKELETON)
 
 

@@ -65,7 +65,7 @@ def test_normalised_coordinates_without_image_size_point_at_the_sidecar(tmp_path
     ({"frames": [{"frame": 0, "landmarks": landmarks(x="a")}]}, "frames[0].landmarks",
      "list of numbers"),
     ({"frames": [{"frame": 0, "landmarks": landmarks(extra=(0.0, 2.0))}]},
-     "frames[0].landmarks", r"confidence must lie in \[0, 1\]"),
+     "frames[0].landmarks", r"visibility 2 is not in \[0, 1\] \(a logit\?\)"),
     ({"frames": [{"frame": 0, "score": "high", "landmarks": landmarks()}]}, "frames[0].score",
      "must be a finite number"),
     ({"frames": [{"frame": 0}, {"frame": -1}]}, "frames[1].frame", "whole number from 0"),
