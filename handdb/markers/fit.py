@@ -18,17 +18,21 @@ from handdb.clip import METERS_PER_UNIT, ClipSpec
 from handdb.errors import ClipDataError, ParameterError
 from handdb.export.rotations import JointMotion
 from handdb.hand.model import (
+    MODEL_SKELETON,
     ROOT_ROTATION,
     HandModel,
     build_hand_model,
     forward_kinematics,
     joint_transforms,
 )
+from handdb.hand.skeletons import load_skeleton
 from handdb.lengths.bone_lengths import BoneLengths
 from handdb.lifting.result import LiftResult
 from handdb.markers.calibration import Calibration, calibrate, calibrated_bone_lengths
 from handdb.markers.solve import (
     SwarmSettings,
+    carry_unconstrained,
+    constrained_dofs,
     filter_and_refine,
     initial_pose,
     interpolate_poses,
@@ -52,6 +56,10 @@ METHOD_NAME = "marker-fit"
 
 #: Markers a frame needs for a first pose.
 MIN_START_MARKERS = 3
+
+#: Joints a clip must mark, and the calibration frames each show, for the model's 33
+#: degrees of freedom to be determined (three coordinates per marker).
+MIN_JOINT_MARKERS = 11
 
 #: Axis names of the root's orientation rows in ``joint_angles`` (rotation vector).
 ROOT_AXES = ("rotvec_x", "rotvec_y", "rotvec_z")
@@ -132,6 +140,7 @@ def fit_markers(markers: np.ndarray, *, hand: str = "right", units: str = "mm",
     mm_per_unit = METERS_PER_UNIT[units] * 1000.0
     mm = np.asarray(markers, dtype=np.float64) * mm_per_unit
     visible = np.asarray(np.isfinite(mm).all(axis=-1), dtype=bool)
+    _check_enough_markers(visible, calibrating=not bone_lengths)
     if bone_lengths:
         model = build_hand_model(hand, {k: v * mm_per_unit for k, v in bone_lengths.items()})
         calibration = None
@@ -153,12 +162,39 @@ def fit_markers(markers: np.ndarray, *, hand: str = "right", units: str = "mm",
         guesses = interpolate_poses(keys, key_poses, between)
         poses[between] = refine_poses(model, mm[between], guesses, solver=solver,
                                       settings=settings, rng=rng)
+    poses = carry_unconstrained(poses, constrained_dofs(model, visible))
     poses = filter_and_refine(model, mm, poses, passes=filter_passes)
     joints = forward_kinematics(model, poses)
     residual = np.where(visible, np.linalg.norm(joints - mm, axis=-1), np.nan)
     return MarkerFit(model=model, poses=poses, joints=joints / mm_per_unit,
                      residual=residual / mm_per_unit, calibration=calibration,
                      key_frames=keys)
+
+
+def _check_enough_markers(visible: np.ndarray, *, calibrating: bool) -> None:
+    """Refuse a marker track that cannot determine the hand model's pose or shape.
+
+    Raises
+    ------
+    ClipDataError
+        If fewer than :data:`MIN_JOINT_MARKERS` joints are ever marked, or, when the
+        subject is to be calibrated, no frame shows that many.
+    """
+    joints = load_skeleton(MODEL_SKELETON).joints
+    marked = [joints[j] for j in np.flatnonzero(visible.any(axis=0))]
+    advice = ("map more of the clip's markers to joints in the sidecar's joint_map, or "
+              "give the clip as 2D tracks")
+    if len(marked) < MIN_JOINT_MARKERS:
+        raise ClipDataError(
+            f"marker fitting needs at least {MIN_JOINT_MARKERS} of the {len(joints)} joints "
+            f"marked (the hand model has 33 degrees of freedom); the clip marks "
+            f"{len(marked)}: {', '.join(marked) or 'none'}. To fix: {advice}")
+    richest = int(visible.sum(axis=1).max())
+    if calibrating and richest < MIN_JOINT_MARKERS:
+        raise ClipDataError(
+            f"subject calibration needs frames showing at least {MIN_JOINT_MARKERS} markers; "
+            f"the richest frame shows {richest}. To fix: give the subject's bone_lengths in "
+            f"the sidecar, or {advice}")
 
 
 def fitted_bone_lengths(fit: MarkerFit, spec: ClipSpec) -> BoneLengths:

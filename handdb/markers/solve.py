@@ -62,6 +62,15 @@ MAX_EVALUATIONS = 200
 #: Keeps least-squares starting points strictly inside the joint limits.
 LIMIT_MARGIN = 1e-9
 
+#: A visible marker this far from its fitted joint, mm, means the fit is caught in a wrong
+#: valley (the robust loss hardly pulls so far a marker): its finger is fitted again from
+#: fresh starts.
+RECOVERY_DISTANCE_MM = 4.0 * MARKER_CUTOFF_MM
+
+#: Fresh starts of a finger caught far from its markers: its flexion angles at these
+#: fractions of their range (0 straight, 1 fully flexed), its other angles at rest.
+RESTART_FLEXION = (0.0, 0.5, 0.9)
+
 
 @dataclass(frozen=True)
 class SwarmSettings:
@@ -355,6 +364,112 @@ def initial_pose(model: HandModel, observed: np.ndarray, visible: np.ndarray) ->
     return fit_pose_lsq(model, observed, visible, pose, None)
 
 
+def _robust_cost(model: HandModel, pose: np.ndarray, observed: np.ndarray,
+                 visible: np.ndarray, anchor: np.ndarray | None, anchor_weight: float,
+                 cutoff: float) -> float:
+    """The objective :func:`fit_pose_lsq` minimises, at ``pose``."""
+    errors = forward_kinematics(model, pose)[visible] - observed[visible]
+    cost = float(np.sum(cutoff ** 2 * np.log1p((errors / cutoff) ** 2)))
+    if anchor is not None:
+        cost += anchor_weight / MARKER_WEIGHT * float(np.sum((pose - anchor) ** 2))
+    return cost
+
+
+def fit_pose_recovering(model: HandModel, observed: np.ndarray, visible: np.ndarray,
+                        start: np.ndarray, anchor: np.ndarray | None, *,
+                        anchor_weight: float = SMOOTHNESS_WEIGHT,
+                        cutoff: float = MARKER_CUTOFF_MM) -> np.ndarray:
+    """:func:`fit_pose_lsq`, and fresh starts for every finger left far from its markers.
+
+    A finger that reappears after frames hidden, or that the previous frame left in the
+    wrong valley, can end with a visible marker more than :data:`RECOVERY_DISTANCE_MM`
+    from its joint, a place the robust loss no longer pulls out of. Each such finger is
+    fitted again from the starts of :data:`RESTART_FLEXION`, and the pose of lowest
+    objective kept.
+
+    Parameters and returns as :func:`fit_pose_lsq`.
+    """
+    def fit(begin: np.ndarray) -> np.ndarray:
+        return fit_pose_lsq(model, observed, visible, begin, anchor,
+                            anchor_weight=anchor_weight, cutoff=cutoff)
+
+    pose = fit(start)
+    distance = np.linalg.norm(forward_kinematics(model, pose) - observed, axis=-1)
+    far = visible & (distance > RECOVERY_DISTANCE_MM)
+    fingers = np.array(model.skeleton.fingers)
+    names = np.array(model.dof_names[6:])
+    flexion = np.array([name.endswith(".flexion") for name in names])
+    for finger in sorted(set(fingers[far])):
+        dofs = np.flatnonzero(np.char.startswith(names, f"{finger}_")) + 6
+        best = _robust_cost(model, pose, observed, visible, anchor, anchor_weight, cutoff)
+        for share in RESTART_FLEXION:
+            begin = pose.copy()
+            begin[dofs] = np.where(flexion[dofs - 6], model.lower[dofs] + share * (
+                model.upper[dofs] - model.lower[dofs]), 0.0)
+            candidate = fit(begin)
+            cost = _robust_cost(model, candidate, observed, visible, anchor, anchor_weight,
+                                cutoff)
+            if cost < best:
+                pose, best = candidate, cost
+    return pose
+
+
+def constrained_dofs(model: HandModel, visible: np.ndarray) -> np.ndarray:
+    """Which degrees of freedom the visible markers of each frame constrain.
+
+    A joint angle moves its bone and every joint beyond it; it is constrained when one of
+    those joints' markers is visible. The root's six are constrained by three markers.
+
+    Parameters
+    ----------
+    model
+        The hand model.
+    visible
+        ``(T, J) bool``.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(T, 33) bool``.
+    """
+    parents = model.skeleton.parents
+    below = np.eye(model.n_joints, dtype=bool)
+    for joint in np.argsort(model.skeleton.depth())[::-1]:
+        if parents[joint] >= 0:
+            below[parents[joint]] |= below[joint]
+    moved = below[model.dof_bone]
+    root = np.repeat(visible.sum(axis=1, keepdims=True) >= 3, 6, axis=1)
+    return np.concatenate([root, (visible[:, None, :] & moved[None]).any(axis=-1)], axis=1)
+
+
+def carry_unconstrained(poses: np.ndarray, constrained: np.ndarray) -> np.ndarray:
+    """Give each degree of freedom no marker constrains its value from the frames around.
+
+    Between two frames where an angle is constrained it is interpolated linearly; before
+    the first and after the last it holds their values. An angle never constrained keeps
+    its fitted values (the pull of the previous frame's pose).
+
+    Parameters
+    ----------
+    poses
+        ``(T, 33)`` fitted poses.
+    constrained
+        ``(T, 33) bool`` (:func:`constrained_dofs`).
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(T, 33)`` poses; ``poses`` is left as it is.
+    """
+    carried = np.array(poses, dtype=np.float64)
+    frames = np.arange(len(poses))
+    for dof in range(poses.shape[1]):
+        known = constrained[:, dof]
+        if known.any() and not known.all():
+            carried[~known, dof] = np.interp(frames[~known], frames[known], poses[known, dof])
+    return carried
+
+
 def fit_pose(model: HandModel, observed: np.ndarray, visible: np.ndarray, start: np.ndarray,
              anchor: np.ndarray, *, solver: str = "lsq", anchor_weight: float = SMOOTHNESS_WEIGHT,
              cutoff: float = MARKER_CUTOFF_MM, correspondence: str = "labelled",
@@ -364,8 +479,8 @@ def fit_pose(model: HandModel, observed: np.ndarray, visible: np.ndarray, start:
     if solver == "lsq":
         if correspondence != "labelled":
             raise ParameterError("the least-squares fit uses labelled markers only")
-        return fit_pose_lsq(model, observed, visible, start, anchor,
-                            anchor_weight=anchor_weight, cutoff=cutoff)
+        return fit_pose_recovering(model, observed, visible, start, anchor,
+                                   anchor_weight=anchor_weight, cutoff=cutoff)
     if solver == "pso":
         return fit_pose_pso(model, observed, visible, start, anchor, anchor_weight=anchor_weight,
                             cutoff=cutoff, correspondence=correspondence, settings=settings,
