@@ -25,6 +25,7 @@ from handdb.errors import (
     HanddbError,
     InputError,
     ParameterError,
+    SkeletonError,
     StageError,
     UnknownNameError,
 )
@@ -49,9 +50,6 @@ from handdb.validation.plausibility import Verdict, assess
 
 #: Lifting methods compared against ground truth for every 2D clip that has it.
 VALIDATED_METHODS: tuple[str, ...] = ("thesis", "thesis-nocheck", DEFAULT_LIFT)
-
-#: The skeleton the kinematic hand model of the marker fit is built on.
-MARKER_SKELETON = "mediapipe21"
 
 #: Folders of the database that hold files other than tables.
 USD_DIR, REPORTS_DIR = "usd", "reports"
@@ -185,14 +183,13 @@ def fit_marker_clip(result: ClipResult) -> ClipResult:
     """
     clip, spec = result.clip, result.clip.spec
     markers = _needs(clip.markers, "marker ingest", result)
-    if spec.skeleton != MARKER_SKELETON:
-        raise ClipRefused(ValueError(f"marker clips use the {MARKER_SKELETON} marker set (the "
-                                     f"21 markers of Zhao et al.), not '{spec.skeleton}'"),
-                          "skeleton")
     params = {k: v for k, v in spec.lift.items() if k != "method"}
     try:
-        fit = fit_markers(markers, hand=spec.hand, units=spec.units,
+        fit = fit_markers(markers, hand=spec.hand, units=spec.units, skeleton=spec.skeleton,
                           bone_lengths=spec.bone_lengths or None, **params)
+    except SkeletonError as error:
+        raise ClipRefused(ValueError(f"the hand model cannot fit markers on '{spec.skeleton}': "
+                                     f"{error}"), "skeleton") from None
     except (*METHOD_ERRORS, ClipDataError) as error:
         raise _method_refusal(error, clip, "lift") from None
     return replace(result, fit=fit, lifted=fit_positions(fit),

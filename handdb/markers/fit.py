@@ -3,8 +3,9 @@
 This is the system of Zhao, Chai & Xu (SCA 2012) on marker data alone: subject calibration
 (§4) when the clip gives no bone lengths, sequential pose fitting of key frames (§5), and
 interpolation of the poses between key frames refined to their visible markers (§6,
-eq. 12). Markers come in clip units on the ``mediapipe21`` skeleton; fitting runs in
-millimetres, the unit of the paper's cut-off.
+eq. 12). Markers come in clip units, one per joint of a skeleton preset the hand model
+moves (``mediapipe21``, ``dhg22``, ...); fitting runs in millimetres, the unit of the
+paper's cut-off.
 """
 
 from __future__ import annotations
@@ -25,7 +26,7 @@ from handdb.hand.model import (
     forward_kinematics,
     joint_transforms,
 )
-from handdb.hand.skeletons import load_skeleton
+from handdb.hand.skeletons import Skeleton
 from handdb.lengths.bone_lengths import BoneLengths
 from handdb.lifting.result import LiftResult
 from handdb.markers.calibration import Calibration, calibrate, calibrated_bone_lengths
@@ -102,6 +103,7 @@ def key_frames(n_frames: int, step: int = KEY_STEP) -> np.ndarray:
 
 
 def fit_markers(markers: np.ndarray, *, hand: str = "right", units: str = "mm",
+                skeleton: str = MODEL_SKELETON,
                 bone_lengths: dict[str, float] | None = None, solver: str = DEFAULT_SOLVER,
                 key_step: int = KEY_STEP, correspondence: str = "labelled",
                 filter_passes: int = 1, settings: SwarmSettings | None = None,
@@ -111,12 +113,14 @@ def fit_markers(markers: np.ndarray, *, hand: str = "right", units: str = "mm",
     Parameters
     ----------
     markers
-        ``(T, J, 3) float64`` marker positions on the ``mediapipe21`` skeleton, clip units,
+        ``(T, J, 3) float64`` marker positions on the joints of ``skeleton``, clip units,
         NaN where a marker is missing.
     hand
         ``"right"`` or ``"left"``.
     units
         The clip's length unit (a key of :data:`handdb.clip.METERS_PER_UNIT`).
+    skeleton
+        The skeleton preset of the joint axis.
     bone_lengths
         Child joint -> length in clip units; when given, calibration is skipped and bones
         not named keep the template length.
@@ -140,12 +144,14 @@ def fit_markers(markers: np.ndarray, *, hand: str = "right", units: str = "mm",
     mm_per_unit = METERS_PER_UNIT[units] * 1000.0
     mm = np.asarray(markers, dtype=np.float64) * mm_per_unit
     visible = np.asarray(np.isfinite(mm).all(axis=-1), dtype=bool)
-    _check_enough_markers(visible, calibrating=not bone_lengths)
+    template = build_hand_model(hand, skeleton=skeleton)
+    _check_enough_markers(template.skeleton, visible, calibrating=not bone_lengths)
     if bone_lengths:
-        model = build_hand_model(hand, {k: v * mm_per_unit for k, v in bone_lengths.items()})
+        model = build_hand_model(hand, {k: v * mm_per_unit for k, v in bone_lengths.items()},
+                                 skeleton=skeleton)
         calibration = None
     else:
-        calibration = calibrate(build_hand_model(hand), mm)
+        calibration = calibrate(template, mm)
         model = calibration.model
     rich = np.flatnonzero(visible.sum(axis=1) >= MIN_START_MARKERS)
     if not rich.size:
@@ -171,7 +177,8 @@ def fit_markers(markers: np.ndarray, *, hand: str = "right", units: str = "mm",
                      key_frames=keys)
 
 
-def _check_enough_markers(visible: np.ndarray, *, calibrating: bool) -> None:
+def _check_enough_markers(skeleton: Skeleton, visible: np.ndarray, *,
+                          calibrating: bool) -> None:
     """Refuse a marker track that cannot determine the hand model's pose or shape.
 
     Raises
@@ -180,7 +187,7 @@ def _check_enough_markers(visible: np.ndarray, *, calibrating: bool) -> None:
         If fewer than :data:`MIN_JOINT_MARKERS` joints are ever marked, or, when the
         subject is to be calibrated, no frame shows that many.
     """
-    joints = load_skeleton(MODEL_SKELETON).joints
+    joints = skeleton.joints
     marked = [joints[j] for j in np.flatnonzero(visible.any(axis=0))]
     advice = ("map more of the clip's markers to joints in the sidecar's joint_map, or "
               "give the clip as 2D tracks")

@@ -1,19 +1,35 @@
 """The real tool files that ingest build into clips, without Prefect; the refused ones are
 recorded and the rest of the inbox is built (issue 15)."""
 
+import json
+import shutil
+
 import pytest
 
 from handdb.build import BuildOptions, build_in_process
 from handdb.store.query import query
-from tests.unit.ingest.test_real_tools import BRICE_MAP, SIDECAR_2D, SIDECAR_3D, put
+from tests.unit.ingest.test_real_tools import (
+    BRICE_MAP,
+    GLOVE_TIPS,
+    SIDECAR_2D,
+    SIDECAR_3D,
+    put,
+)
 
 BONES = {"bone_lengths": {"index_pip": 40.0, "thumb_cmc": 34.0}}
 
 
 @pytest.fixture(scope="module")
-def built(real_tools, tmp_path_factory):
+def built(real_tools, dhg_sample, tmp_path_factory):
     root = tmp_path_factory.mktemp("real-tools")
     inbox = root / "inbox"
+    inbox.mkdir()
+    shutil.copy(dhg_sample, inbox / "dhg.dhg.txt")
+    (inbox / "dhg.clip.json").write_text(json.dumps(SIDECAR_3D | {"skeleton": "dhg22"}))
+    put(real_tools, inbox, "qtm", SIDECAR_3D | {"fps": 100, "joint_map": {
+        "*": None, **GLOVE_TIPS, **{f"{f}_middle": f"{f}_pip" for f in (
+            "index", "middle", "ring", "little")}, "thumb_middle": "thumb_ip"}},
+        clip_id="glove")
     put(real_tools, inbox, "openpose", SIDECAR_2D | BONES | {"person": 0, "fps": 25},
         clip_id="signer")
     put(real_tools, inbox, "dlc", SIDECAR_2D | BONES | {
@@ -34,10 +50,11 @@ def built(real_tools, tmp_path_factory):
 def test_real_files_build_into_clips(built):
     summary, db = built
     assert summary.ok
-    assert sorted(summary.processed) == ["brice-right", "ih-cap3", "mp-hand0", "signer"]
+    assert sorted(summary.processed) == ["brice-right", "dhg", "ih-cap3", "mp-hand0", "signer"]
     rows = query(db, "SELECT clip_id, n_frames, source_format FROM clips ORDER BY clip_id")
     assert rows.to_pylist() == [
         {"clip_id": "brice-right", "n_frames": 20, "source_format": "dlc"},
+        {"clip_id": "dhg", "n_frames": 95, "source_format": "dhg"},
         {"clip_id": "ih-cap3", "n_frames": 1, "source_format": "interhand"},
         {"clip_id": "mp-hand0", "n_frames": 64, "source_format": "mediapipe_csv"},
         {"clip_id": "signer", "n_frames": 9, "source_format": "openpose"},
@@ -47,10 +64,39 @@ def test_real_files_build_into_clips(built):
 def test_refused_real_files_say_what_to_do(built):
     summary, db = built
     refused = {r.file.rsplit("/", 1)[-1]: r for r in summary.refusals}
-    assert sorted(refused) == ["kistler.c3d", "opto.c3d"]
+    assert sorted(refused) == ["glove.clip.json", "kistler.c3d", "opto.c3d"]
     assert refused["kistler.c3d"].field == "POINT:USED"
     assert "export the markers" in refused["kistler.c3d"].reason
     assert refused["opto.c3d"].field == "POINT:FRAMES"
     assert "truncated; export it again" in refused["opto.c3d"].reason
     stored = query(db, "SELECT count(*) AS n FROM quarantine").column("n")[0].as_py()
-    assert stored == 2
+    assert stored == 3
+
+
+
+def test_real_3d_captures_are_fitted_on_their_own_skeleton(built):
+    _, db = built
+    rows = query(db, "SELECT clip_id, count(DISTINCT joint) AS joints, "
+                     "any_value(lift_method) AS method FROM joints_3d "
+                     "WHERE clip_id IN ('dhg', 'ih-cap3') GROUP BY clip_id ORDER BY clip_id")
+    assert rows.to_pylist() == [{"clip_id": "dhg", "joints": 22, "method": "marker-fit"},
+                                {"clip_id": "ih-cap3", "joints": 21, "method": "marker-fit"}]
+
+
+def test_a_glove_of_ten_markers_is_refused_with_what_to_do(built):
+    summary, _ = built
+    (glove,) = [r for r in summary.refusals if r.file.endswith("glove.clip.json")]
+    assert "at least 11 of the 21 joints" in glove.reason and "marks 10" in glove.reason
+    assert "joint_map" in glove.reason
+
+
+def test_a_short_detector_clip_gets_an_adult_hand(built):
+    # nine OpenPose frames of a low-confidence hand: too few for the images to measure a
+    # bone, so the given lengths size the average hand (the clip once got a 222 mm
+    # metacarpal)
+    _, db = built
+    rows = query(db, "SELECT bone, length, source FROM bone_lengths WHERE clip_id = 'signer' "
+                     "AND bone IN ('index_mcp', 'middle_pip')").to_pylist()
+    lengths = {r["bone"]: r["length"] for r in rows}
+    assert 60.0 < lengths["index_mcp"] < 100.0 and 35.0 < lengths["middle_pip"] < 55.0
+    assert {r["source"] for r in rows} == {"proportions"}
