@@ -7,7 +7,11 @@ markers per frame, no bone lengths given:
 * the full pipeline (calibration, key frames, eq. 12 refinement, PFIK+F): MPJPE to the
   truth and frames per second;
 * least squares against the paper's particle swarm, frame by frame, on the same model;
-* on the real DHG sample (dhg22 -> mediapipe21, all markers present): the fit residuals.
+* a population of hands (seeds 0-5: sizes, proportions, palms, thumb bases and wrist
+  points of :func:`handdb.hand.population.sample_shape`): visible-marker residual and MPJPE
+  of the full fit per hand;
+* on the real DHG sample (all markers present; 6 of 21 hidden a frame): the fit residuals
+  and, where markers are hidden, the error to the hidden joints.
 
 Run: ``.venv/bin/python benchmarks/bench_fitting.py [n_frames]``.
 """
@@ -20,9 +24,8 @@ from pathlib import Path
 
 import numpy as np
 
-from handdb.hand.correspondence import convert_points
 from handdb.hand.model import forward_kinematics
-from handdb.hand.skeletons import load_skeleton
+from handdb.hand.skeletons import convert_points, load_skeleton
 from handdb.markers.fit import fit_markers
 from handdb.markers.solve import track
 from handdb.synthetic import synthesize_clip
@@ -93,13 +96,45 @@ def held_out(n_frames: int) -> None:
               f"{SOLVER_FRAMES / seconds:.2f} frames/s")
 
 
+POPULATION_SEEDS = range(6)
+POPULATION_FRAMES = 60
+
+
+def population() -> None:
+    rows = []
+    for seed in POPULATION_SEEDS:
+        clip = synthesize_clip("random", POPULATION_FRAMES, seed=seed)
+        rng = np.random.default_rng(seed)
+        hidden = occlusion_runs(clip.xyz.shape[:2], HIDDEN_FRACTION, MEAN_RUN_FRAMES, rng)
+        markers = clip.xyz + rng.normal(0.0, NOISE_MM, clip.xyz.shape)
+        markers[hidden] = np.nan
+        fit = fit_markers(markers, hand=clip.hand, units=clip.units)
+        err = errors(fit.joints, clip.xyz)
+        rows.append((np.nanmean(fit.residual), err.mean(), err[hidden].mean()))
+        print(f"population hand {seed}: visible-marker residual {rows[-1][0]:.2f} mm, MPJPE "
+              f"{rows[-1][1]:.2f} mm (hidden joints {rows[-1][2]:.2f})")
+    mean = np.mean(rows, axis=0)
+    print(f"population mean: visible residual {mean[0]:.2f} mm, MPJPE {mean[1]:.2f} mm, "
+          f"hidden {mean[2]:.2f} mm")
+
+
 def dhg_sample() -> None:
     path = DHG / "skeletons_world.txt"
     if not path.is_file():
         print("DHG sample: absent, skipped")
         return
-    dhg = np.loadtxt(path).reshape(-1, 22, 3) * 1000.0
-    markers = convert_points(dhg, load_skeleton("dhg22"), load_skeleton("mediapipe21"))
+    markers = np.loadtxt(path).reshape(-1, 22, 3) * 1000.0
+    rng = np.random.default_rng(0)
+    hidden = np.zeros(markers.shape[:2], dtype=bool)
+    for frame in hidden:
+        frame[rng.choice(np.arange(1, 22), 6, replace=False)] = True
+    partial = np.where(hidden[..., None], np.nan, markers)
+    fit = fit_markers(partial, skeleton="dhg22")
+    err = errors(fit.joints, markers)
+    print(f"DHG sample on dhg22, 6 of 22 joints hidden a frame: visible residual "
+          f"{np.nanmean(fit.residual):.1f} mm, MPJPE {err.mean():.1f} mm (hidden "
+          f"{err[hidden].mean():.1f} mm)")
+    markers = convert_points(markers, load_skeleton("dhg22"), load_skeleton("mediapipe21"))
     for hand in ("right", "left"):
         start = time.perf_counter()
         fit = fit_markers(markers, hand=hand, units="mm")
@@ -114,4 +149,5 @@ def dhg_sample() -> None:
 
 if __name__ == "__main__":
     held_out(int(sys.argv[1]) if len(sys.argv) > 1 else 150)
+    population()
     dhg_sample()
