@@ -4,6 +4,7 @@ from scipy.spatial.transform import Rotation
 
 from handdb.clip import Camera
 from handdb.errors import BoneLengthError
+from handdb.hand.model import forward_kinematics
 from handdb.hand.skeletons import bone_length_array, load_skeleton
 from handdb.lifting import available_methods, lift
 from handdb.synthetic.clips import synthesize_clip, thesis_clench_clip
@@ -107,7 +108,8 @@ def tilted_flat_hand(n_frames=30):
     A flat hand is its own mirror image, so no view can tell which way it tilts.
     """
     skeleton = load_skeleton("mediapipe21")
-    flat = make_hand("mediapipe21").rest_pose * [1.0, 1.0, 0.0]
+    model = make_hand("mediapipe21")
+    flat = forward_kinematics(model, model.rest_pose()) * [1.0, 1.0, 0.0]
     parent, child = skeleton.bones.T
     lengths = np.full(skeleton.n_joints, np.nan)
     lengths[child] = np.linalg.norm(flat[child] - flat[parent], axis=-1)

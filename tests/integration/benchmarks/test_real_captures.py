@@ -1,0 +1,40 @@
+"""The real-hands benchmark runs end to end and reports every dataset it has data for."""
+
+import importlib.util
+import sys
+
+import pytest
+
+from tests.support.paths import DHG_SAMPLE, REAL_TOOLS, REPO
+
+SCRIPT = REPO / "benchmarks" / "real_captures.py"
+
+
+@pytest.fixture(scope="module")
+def bench():
+    """``benchmarks/real_captures.py`` as a module (the benchmarks folder is not a package)."""
+    spec = importlib.util.spec_from_file_location("bench_real_captures", SCRIPT)
+    module = importlib.util.module_from_spec(spec)
+    sys.modules[spec.name] = module
+    spec.loader.exec_module(module)
+    yield module
+    del sys.modules[spec.name]
+
+
+def test_the_quick_run_writes_every_table(bench, tmp_path, capsys):
+    out = tmp_path / "RESULTS-real.md"
+    bench.main(["--quick", "--out", str(out)])
+    text = out.read_text()
+    assert text == capsys.readouterr().out
+    assert "## Synthetic population" in text
+    for method in bench.METHODS:
+        assert f"| {method} |" in text
+    for camera in bench.CAMERAS:
+        assert f"**{camera}**" in text
+    sections = text.count("## ") - text.count("Skipped:")
+    assert text.count("Bones where the default's sign accuracy is below") == sections
+    assert "Constants: tuned" in text and "(--quick)" in text
+    if DHG_SAMPLE.is_file():
+        assert "## DHG in its own view" in text
+    if (REAL_TOOLS / "interhand").is_dir():
+        assert "pseudo-clips" in text and "held out" in text
