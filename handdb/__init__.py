@@ -8,9 +8,8 @@ out as Parquet tables queried with DuckDB, and as USD skeletal animation.
 >>> con.sql("SELECT count(*) FROM joints_3d").fetchall()   # doctest: +SKIP
 """
 
+from importlib import import_module
 from importlib.metadata import PackageNotFoundError, version
-
-from handdb.store.query import connect, query
 
 try:
     __version__ = version("handdb")
@@ -18,3 +17,13 @@ except PackageNotFoundError:  # running from a source tree that was never instal
     __version__ = "0+unknown"
 
 __all__ = ["__version__", "connect", "query"]
+
+#: The public functions, imported on first use so that ``import handdb`` (and the command
+#: line's start) does not load DuckDB and Arrow: name -> defining module.
+_LAZY = {"connect": "handdb.store.query", "query": "handdb.store.query"}
+
+
+def __getattr__(name: str):
+    if name in _LAZY:
+        return getattr(import_module(_LAZY[name]), name)
+    raise AttributeError(f"module 'handdb' has no attribute {name!r}")

@@ -8,11 +8,12 @@ Every command that touches a database takes ``--db`` (default ``./data/db`` or
 from __future__ import annotations
 
 import csv
+import importlib
 import json
 import sys
 from enum import StrEnum
 from pathlib import Path
-from typing import Annotated
+from typing import Annotated, Any
 
 import typer
 from rich.console import Console
@@ -22,8 +23,71 @@ from rich.table import Table
 from handdb.errors import HanddbError
 from handdb.paths import DEFAULT_DB, DEFAULT_INBOX
 
+#: Sub-commands whose modules are imported only when they run, so that ``handdb --help``
+#: and the light commands start without USD, scipy or matplotlib: name -> (module, the
+#: module's Typer app or command function, the one-line help ``handdb --help`` lists).
+LAZY_COMMANDS: dict[str, tuple[str, str, str]] = {
+    "gapfill-eval": ("handdb.cli.gapfill", "gapfill_eval",
+                     "Hide known points of full tracks, fill them with every method, print "
+                     "the RMSE."),
+    "export-usd": ("handdb.cli.export", "export_usd",
+                   "Export a clip as a UsdSkel animation with a skinned hand mesh."),
+    "export-bvh": ("handdb.cli.export", "export_bvh",
+                   "Export a clip's joint rotations as BVH."),
+    "ratios": ("handdb.cli.ratios", "app",
+               "Relative phalanx lengths from X-ray images and joint placement (Chaudhry et "
+               "al.)."),
+    "lift": ("handdb.cli.lift", "app", "Depth reconstruction."),
+}
+
+
+def load_command(name: str) -> Any:
+    """Import the sub-command ``name`` of :data:`LAZY_COMMANDS`; return its click command.
+
+    Typer builds the command with the click it runs on (newer Typers vendor their own),
+    so this module names no click class itself.
+    """
+    module, attribute, _ = LAZY_COMMANDS[name]
+    target = getattr(importlib.import_module(module), attribute)
+    if not isinstance(target, typer.Typer):
+        single = typer.Typer(add_completion=False)
+        single.command(name)(target)
+        target = single
+    command = typer.main.get_command(target)
+    command.name = name
+    return command
+
+
+class LazyGroup(typer.core.TyperGroup):
+    """The ``handdb`` group, whose :data:`LAZY_COMMANDS` load only when they run.
+
+    Listing them (``handdb --help``) reads their one-line help from the table.
+    """
+
+    def list_commands(self, ctx: Any) -> list[str]:
+        """The eager commands, then the lazy ones."""
+        return [*super().list_commands(ctx), *LAZY_COMMANDS]
+
+    def get_command(self, ctx: Any, cmd_name: str) -> Any:
+        """The command ``cmd_name``; a lazy one not yet loaded as a stub holding its help."""
+        command = super().get_command(ctx, cmd_name)
+        if command is None and cmd_name in LAZY_COMMANDS:
+            short_help = LAZY_COMMANDS[cmd_name][2]
+            return typer.core.TyperCommand(cmd_name, help=short_help, short_help=short_help)
+        return command
+
+    def resolve_command(self, ctx: Any, args: list[str]) -> tuple[str | None, Any,
+                                                                            list[str]]:
+        """The command that runs, a lazy one imported now."""
+        name, command, rest = super().resolve_command(ctx, args)
+        if name in LAZY_COMMANDS and name not in self.commands:
+            command = self.commands[name] = load_command(name)
+        return name, command, rest
+
+
 app = typer.Typer(
     name="handdb",
+    cls=LazyGroup,
     help="Build and query a hand motion database from 2D keypoint tracks and X-ray "
     "bone measurements.",
     no_args_is_help=True,
@@ -222,19 +286,6 @@ def demo(inbox: Inbox = DEFAULT_INBOX, db: Db = DEFAULT_DB) -> None:
     out.print(describe_database(db))
     if summary.failed:
         raise typer.Exit(EXIT_FAILED)
-
-
-def _register_subcommands() -> None:
-    from handdb.cli import export, gapfill, lift, ratios
-
-    app.add_typer(ratios.app, name="ratios")
-    app.add_typer(lift.app, name="lift")
-    app.command("gapfill-eval")(gapfill.gapfill_eval)
-    app.command("export-usd")(export.export_usd)
-    app.command("export-bvh")(export.export_bvh)
-
-
-_register_subcommands()
 
 
 def main() -> None:

@@ -25,7 +25,7 @@ from handdb.lifting import available_methods, lift
 from handdb.synthetic.clips import synthesize_clip, thesis_clench_clip
 from handdb.validation.depth import clip_summary, comparison_chart, validation_table
 
-app = typer.Typer(name="lift", no_args_is_help=True)
+app = typer.Typer(name="lift", no_args_is_help=True, add_completion=False)
 out = Console()
 
 #: Frames of a synthesized clip.

@@ -27,7 +27,8 @@ from handdb.paths import DEFAULT_DB
 from handdb.store.database import Store
 
 app = typer.Typer(name="ratios", help="Relative phalanx lengths from X-ray images and "
-                  "joint placement (Chaudhry et al.).", no_args_is_help=True)
+                  "joint placement (Chaudhry et al.).", no_args_is_help=True,
+                  add_completion=False)
 out = Console()
 
 DbOption = typer.Option(DEFAULT_DB, "--db", envvar="HANDDB_DB",

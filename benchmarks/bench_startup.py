@@ -1,0 +1,74 @@
+"""How long the command line takes to start (issue 16: ``handdb --help`` and ``handdb sql``
+under 1 s).
+
+Prints the median wall time of a few runs of each command, each in a fresh interpreter,
+beside the floor of starting Python itself. The ``sql`` runs query a database of one
+small Parquet table made here, so the figure includes DuckDB opening real files.
+
+Run: ``.venv/bin/python benchmarks/bench_startup.py [--repeats N]``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+#: Runs of each command; the median is printed.
+REPEATS = 5
+#: The target of issue 16, seconds.
+TARGET_S = 1.0
+
+
+def wall_time(argv: list[str], repeats: int) -> float:
+    """Median wall time (seconds) of running ``argv`` ``repeats`` times."""
+    times = []
+    for _ in range(repeats):
+        start = time.perf_counter()
+        subprocess.run(argv, check=True, capture_output=True)
+        times.append(time.perf_counter() - start)
+    return statistics.median(times)
+
+
+def small_database(folder: Path) -> Path:
+    """A database folder holding one empty Parquet file per table, as a build writes them."""
+    import pyarrow.parquet as pq
+
+    from handdb.store import tables
+
+    for name in tables.table_names():
+        table_dir = folder / "db" / name
+        table_dir.mkdir(parents=True)
+        pq.write_table(tables.empty(name), table_dir / "part-0.parquet")
+    return folder / "db"
+
+
+def main(argv: list[str] | None = None) -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--repeats", type=int, default=REPEATS)
+    args = parser.parse_args(argv)
+    cli = [sys.executable, "-c", "from handdb.cli import main; main()"]
+    with tempfile.TemporaryDirectory() as tmp:
+        db = small_database(Path(tmp))
+        commands = {
+            "python -c pass (floor)": [sys.executable, "-c", "pass"],
+            "handdb --help": [*cli, "--help"],
+            "handdb build --help": [*cli, "build", "--help"],
+            'handdb sql "SELECT 1"': [*cli, "sql", "SELECT 1", "--db", str(db)],
+            "handdb lift --help (loads lifting)": [*cli, "lift", "--help"],
+        }
+        print(f"| command | median wall s ({args.repeats} runs) | target |")
+        print("|---|---:|---|")
+        for label, command in commands.items():
+            seconds = wall_time(command, args.repeats)
+            target = f"< {TARGET_S:.0f} s" if label in ("handdb --help",
+                                                       'handdb sql "SELECT 1"') else ""
+            print(f"| {label} | {seconds:.2f} | {target} |")
+
+
+if __name__ == "__main__":
+    main()

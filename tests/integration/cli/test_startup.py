@@ -1,0 +1,62 @@
+"""The command line starts without the heavy dependencies its light commands never use."""
+
+import subprocess
+import sys
+
+import pytest
+from typer.testing import CliRunner
+
+from handdb.cli import LAZY_COMMANDS, app, load_command
+
+#: Modules ``handdb --help`` and ``handdb sql`` must not import (each costs 0.2-1 s).
+HEAVY = ("pxr", "scipy", "matplotlib", "prefect", "numba", "handdb.lifting",
+         "handdb.export", "handdb.synthetic")
+
+PROBE = """
+import sys
+from handdb.cli import main
+sys.argv = ["handdb", *{argv!r}]
+try:
+    main()
+except SystemExit:
+    pass
+print("IMPORTED:" + "|".join(sorted(m for m in sys.modules if m.split(".")[0] in {roots!r}
+                      or m.startswith(("handdb.lifting", "handdb.export", "handdb.synthetic")))))
+"""
+
+
+def imported_by(argv: list[str]) -> set[str]:
+    """The heavy modules a fresh interpreter holds after running ``handdb *argv``."""
+    roots = {name.split(".")[0] for name in HEAVY if "." not in name}
+    result = subprocess.run([sys.executable, "-c", PROBE.format(argv=argv, roots=roots)],
+                            capture_output=True, text=True, check=True)
+    listed = result.stdout.rpartition("IMPORTED:")[2].strip()
+    return {name for name in listed.split("|") if name}
+
+
+@pytest.mark.parametrize("argv", [["--help"], ["sql", "--help"], ["build", "--help"]])
+def test_light_commands_do_not_import_the_heavy_libraries(argv):
+    assert imported_by(argv) == set()
+
+
+def test_a_lazy_command_imports_its_module_when_it_runs():
+    assert "handdb.lifting" in imported_by(["lift", "--help"])
+
+
+@pytest.mark.parametrize("name", list(LAZY_COMMANDS))
+def test_the_listed_help_is_the_commands_own(name):
+    command = load_command(name)
+    assert command.name == name
+    first_line = (command.help or "").strip().splitlines()[0]
+    assert first_line == LAZY_COMMANDS[name][2]
+
+
+def test_every_lazy_command_is_listed_and_runs_its_own_help():
+    runner = CliRunner()
+    listing = runner.invoke(app, ["--help"])
+    assert listing.exit_code == 0
+    for name in LAZY_COMMANDS:
+        assert name in listing.output
+        result = runner.invoke(app, [name, "--help"])
+        assert result.exit_code == 0, result.output
+        assert f"handdb {name}" in result.output
