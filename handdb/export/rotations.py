@@ -260,17 +260,19 @@ def joint_rotations(
 
     translations = np.zeros(xyz.shape)
     translations[:, root] = xyz[:, root]
-    n_children = child_counts(skeleton)
-    for parent, child in skeleton.bones:
-        offset = np.einsum("tji,tj->ti", frames[:, parent], xyz[:, child] - xyz[:, parent])
-        measured = np.linalg.norm(offset, axis=-1)
-        length = np.full_like(measured, bone_lengths[child]) if keep_lengths else measured
-        if n_children[parent] == 1:
-            translations[:, child, 1] = length
-        else:
-            translations[:, child] = length[:, None] * _unit(offset)
+    bone_parents, bone_children = np.array(skeleton.bones, dtype=np.intp).reshape(-1, 2).T
+    offsets = np.einsum("tbji,tbj->tbi", frames[:, bone_parents],
+                        xyz[:, bone_children] - xyz[:, bone_parents])
+    lengths = (np.broadcast_to(bone_lengths[bone_children], offsets.shape[:2]) if keep_lengths
+               else np.linalg.norm(offsets, axis=-1))
+    along_bone = child_counts(skeleton)[bone_parents] == 1
+    translations[:, bone_children[along_bone], 1] = lengths[:, along_bone]
+    translations[:, bone_children[~along_bone]] = (lengths[:, ~along_bone, None]
+                                                   * _unit(offsets[:, ~along_bone]))
 
-    flat = Rotation.from_matrix(local.reshape(-1, 3, 3))
+    # Every frame is built orthonormal and right-handed, so scipy's projection onto the
+    # rotations (an SVD per matrix) has nothing to correct.
+    flat = Rotation.from_matrix(local.reshape(-1, 3, 3), assume_valid=True)
     quaternions = flat.as_quat(scalar_first=True).reshape(*xyz.shape[:2], 4)
     return JointMotion(rotations=_continuous_sign(quaternions), translations=translations)
 
