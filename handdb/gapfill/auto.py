@@ -34,6 +34,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from handdb.compiled import kernel
+from handdb.errors import GapFillError, ParameterError
 from handdb.gapfill.gaps import Gaps, find_gaps, mask_points
 from handdb.gapfill.interpolate import interpolate_gaps
 from handdb.gapfill.lowrank import DEFAULT_VARIANCE, blend_to_edges, lowrank_reconstruct
@@ -53,6 +54,9 @@ ESTIMATES = ("chain", "regression", "lowrank")
 LONG_GAP_RULES = (*ESTIMATES, "validated")
 #: The estimates weighed by ``"validated"``.
 VALIDATED_ESTIMATES = ("chain", "regression")
+
+#: Runs of frames with no observed point named in a refusal, at most.
+SHOWN_RUNS = 3
 
 #: The labels of the points ``auto`` fills, by the rule that filled them.
 RULE_LABELS = ("rigid", "pchip", *LONG_GAP_RULES, "rest-pose")
@@ -223,6 +227,50 @@ def _long_gap_fill(
     return blended
 
 
+def check_placeable(missing: np.ndarray, skeleton: Skeleton, never_seen: np.ndarray) -> None:
+    """Refuse a clip whose never-observed joints cannot be placed in every frame.
+
+    A joint never observed is placed in each frame by the rest pose fitted to that frame's
+    observed points (:func:`~handdb.gapfill.rigid.place_from_rest_pose`); a frame that
+    observes no point gives nothing to fit, and its placed points would be NaN, which the
+    regressions downstream cannot solve with (numpy's "Singular matrix"). Labelled frames
+    sparse in time (DeepLabCut's labelled images at their frame numbers) are such clips.
+
+    Parameters
+    ----------
+    missing
+        ``(T, J) bool``.
+    skeleton
+        The clip's skeleton.
+    never_seen
+        ``(K,) int64``: the joints missing in every frame.
+
+    Raises
+    ------
+    GapFillError
+        If ``never_seen`` is not empty and some frame observes no point; the message names
+        the joints and the first runs of empty frames.
+    """
+    empty = missing.all(axis=1)
+    if not never_seen.size or not empty.any():
+        return
+    runs = find_gaps(empty[:, None])
+    shown = ", ".join(f"{start}-{stop - 1}" if stop - start > 1 else f"{start}"
+                      for start, stop in zip(runs.start[:SHOWN_RUNS], runs.stop[:SHOWN_RUNS],
+                                             strict=True))
+    more = f" and {len(runs) - SHOWN_RUNS} more runs" if len(runs) > SHOWN_RUNS else ""
+    names = ", ".join(skeleton.joints[j] for j in never_seen)
+    raise GapFillError(
+        f"gap filling by 'auto' cannot place {names}: never observed in the clip, they are "
+        "placed in each frame from the rest pose fitted to the points the frame observes, "
+        f"and {int(empty.sum())} of {empty.size} frames observe no point (frames {shown}"
+        f"{more}). Frames sparse in time (labelled images at their frame numbers) are not "
+        "a track: number them in order (DeepLabCut: \"frame_from\": \"row\") or drop the "
+        "empty frames; or map a body part to each of those joints; or fill with 'rigid', "
+        "which flags what it cannot place as unfilled"
+    )
+
+
 def fill_auto(
     uv: np.ndarray,
     missing: np.ndarray,
@@ -249,13 +297,22 @@ def fill_auto(
     bone_lengths, scale
         Optional 3D bone lengths (child joint -> length, clip units) and the image scale
         (pixels per unit, scalar or ``(T,)``) that bound the projected bones in refinement.
+
+    Raises
+    ------
+    ParameterError
+        If ``long_gaps`` is not a rule.
+    GapFillError
+        If a joint is never observed and some frame observes no point: the joint cannot
+        be placed there (see :func:`check_placeable`).
     """
     if long_gaps not in LONG_GAP_RULES:
-        raise ValueError(
+        raise ParameterError(
             f"long_gaps must be one of {', '.join(LONG_GAP_RULES)}; got '{long_gaps}'"
         )
     gaps = find_gaps(missing)
     never_seen = np.unique(gaps.joint[gaps.whole_clip])
+    check_placeable(missing, skeleton, never_seen)
     placed = place_from_rest_pose(uv, missing, skeleton, never_seen) if never_seen.size else uv
     unknown = missing.copy()
     unknown[:, never_seen] = False
