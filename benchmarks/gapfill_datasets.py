@@ -23,7 +23,7 @@ stays clean) and, with noise, short dropouts (:data:`DROPOUT_SHARE` of the point
 1-3 frames, missing in the input but not scored).
 
 Run: ``OPENBLAS_NUM_THREADS=1 .venv/bin/python benchmarks/gapfill_datasets.py [--noise PX]
-[--seeds N] [--synthetic-seeds N] [--datasets dhg,mediapipe,glove,synthetic]``: per dataset
+[--seeds N] [--synthetic-seeds N] [--datasets dhg,mediapipe,glove,synthetic] [--raw]``: per dataset
 and projection (real first), the default's RMSE beside the best thesis method's, their
 ratio and whether it meets the 5x target (figures in ``RESULTS-gapfill.md``).
 """
@@ -320,17 +320,22 @@ def main() -> None:
     parser.add_argument("--synthetic-seeds", type=int, default=2,
                         help="synthetic hands (each in every motion and projection)")
     parser.add_argument("--datasets", default="dhg,mediapipe,glove,synthetic")
+    parser.add_argument("--raw", action="store_true",
+                        help="the default fills from the tracks as observed (smooth=False)")
     args = parser.parse_args()
     wanted = args.datasets.split(",")
     cases = [c for c in real_cases() if c.dataset in wanted]
     if "synthetic" in wanted:
         cases += synthetic_cases(range(args.synthetic_seeds))
     started = time.process_time()
-    print(f"noise {args.noise:g} px; RMSE over the hidden points, pixels")
+    unsmoothed = "; auto unsmoothed" if args.raw else ""
+    print(f"noise {args.noise:g} px{unsmoothed}; RMSE over the hidden points, pixels")
     print(f"{'dataset':10s} {'projection':12s} {'held out':8s} {'mask':17s} {'points':>7s} "
           f"{'auto':>8s} {'best thesis':>24s} {'ratio':>6s} {'5x':>3s}")
     held = {c.dataset: c.held_out for c in cases}
-    for dataset, projection, mask, scores in table(cases, args.noise, range(args.seeds)):
+    params = {"smooth": False} if args.raw else {}
+    for dataset, projection, mask, scores in table(cases, args.noise, range(args.seeds),
+                                                   **params):
         best, best_rmse = best_thesis(scores)
         ratio = best_rmse / scores.rmse("auto")
         print(f"{dataset:10s} {projection:12s} {'yes' if held[dataset] else 'no':8s} "

@@ -1,5 +1,8 @@
 """``auto``, the default: per gap, the method that suits it, in the palm frame, then refined.
 
+0. Detector jitter is measured and, where a smoothing window lowers Stein's risk, the
+   observed tracks are smoothed (:mod:`handdb.gapfill.denoise`); everything below reads
+   the smoothed tracks, and the observed points are returned as they were.
 1. The palm's affine motion is fitted frame by frame and every track is expressed in the
    palm frame (:mod:`handdb.gapfill.palm_frame`), where only finger bending is left to
    bridge.
@@ -35,6 +38,7 @@ import numpy as np
 
 from handdb.compiled import kernel
 from handdb.errors import GapFillError, ParameterError
+from handdb.gapfill.denoise import denoise
 from handdb.gapfill.gaps import Gaps, find_gaps, mask_points
 from handdb.gapfill.interpolate import interpolate_gaps
 from handdb.gapfill.lowrank import DEFAULT_VARIANCE, blend_to_edges, lowrank_reconstruct
@@ -281,6 +285,7 @@ def fill_auto(
     variance: float = DEFAULT_VARIANCE,
     bone_lengths: dict[str, float] | None = None,
     scale: float | np.ndarray | None = None,
+    smooth: bool = True,
 ) -> MethodOutput:
     """Fill every gap with the rule that suits it (see the module docstring).
 
@@ -297,6 +302,10 @@ def fill_auto(
     bone_lengths, scale
         Optional 3D bone lengths (child joint -> length, clip units) and the image scale
         (pixels per unit, scalar or ``(T,)``) that bound the projected bones in refinement.
+    smooth
+        Fill from the observed tracks smoothed against detector jitter
+        (:func:`~handdb.gapfill.denoise.denoise`; the observed points are returned as they
+        were), or from the tracks as observed.
 
     Raises
     ------
@@ -313,10 +322,12 @@ def fill_auto(
     gaps = find_gaps(missing)
     never_seen = np.unique(gaps.joint[gaps.whole_clip])
     check_placeable(missing, skeleton, never_seen)
-    placed = place_from_rest_pose(uv, missing, skeleton, never_seen) if never_seen.size else uv
+    smoothed = denoise(uv, missing)[0] if smooth else uv
+    placed = (place_from_rest_pose(smoothed, missing, skeleton, never_seen) if never_seen.size
+              else smoothed)
     unknown = missing.copy()
     unknown[:, never_seen] = False
-    motion = palm_motion(uv, missing, skeleton)
+    motion = palm_motion(smoothed, missing, skeleton)
     local = placed if motion is None else to_palm_frame(placed, motion)
 
     palm = palm_joints(skeleton)[gaps.joint]
@@ -324,15 +335,14 @@ def fill_auto(
     partial = ~gaps.whole_clip
     by_model = partial & ~palm & ~short
 
-    filled = interpolate_gaps(local, unknown, "pchip")
+    filled_local = interpolate_gaps(local, unknown, "pchip")
     if by_model.any():
-        filled = _long_gap_fill(local, filled, unknown, gaps.select(by_model), skeleton,
-                                long_gaps, variance)
-    if motion is not None:
-        frame, joint = mask_points(unknown)
-        local_filled = filled[frame, joint]
-        filled = placed.copy()
-        filled[frame, joint] = to_image(local_filled, motion, frame)
+        filled_local = _long_gap_fill(local, filled_local, unknown, gaps.select(by_model),
+                                      skeleton, long_gaps, variance)
+    filled = np.where(missing[..., None], placed, uv)
+    frame, joint = mask_points(unknown)
+    filled[frame, joint] = (filled_local[frame, joint] if motion is None
+                            else to_image(filled_local[frame, joint], motion, frame))
 
     labels = np.zeros(missing.shape, dtype=f"<U{max(map(len, RULE_LABELS))}")
     for rule, chosen in (("rigid", partial & palm), ("pchip", partial & ~palm & short),

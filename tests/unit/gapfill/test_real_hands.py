@@ -35,3 +35,22 @@ def test_the_rest_pose_of_a_skeleton_that_is_no_preset(datasets):
     preset = load_skeleton("mediapipe21")
     rows = [preset.index(joint) for joint in glove.joints]
     np.testing.assert_allclose(rest_pose_2d(glove), rest_pose_2d(preset)[rows])
+
+
+def _glove_clip(datasets, projection):
+    cases = [c for c in datasets.glove_cases() if c.projection == projection]
+    if not cases:
+        pytest.skip(f"shared data not present: {datasets.GLOVE}")
+    return cases[0]
+
+
+def test_smoothing_helps_on_a_real_glove_seen_through_a_noisy_detector(datasets):
+    case = _glove_clip(datasets, "orthographic")
+    smoothed = raw = None
+    for seed in range(2):
+        scores = datasets.score(case, datasets.RANDOM_MASK, 3.0, ("auto",), seed=seed)
+        unsmoothed = datasets.score(case, datasets.RANDOM_MASK, 3.0, ("auto",), seed=seed,
+                                    smooth=False)
+        smoothed = scores if smoothed is None else smoothed + scores
+        raw = unsmoothed if raw is None else raw + unsmoothed
+    assert smoothed.rmse("auto") < 0.95 * raw.rmse("auto")
