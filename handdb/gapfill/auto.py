@@ -14,9 +14,11 @@
    the joint's angle changing linearly across the gap) and a ridge regression on the finger
    joints seen throughout the gap (:mod:`handdb.gapfill.regression`), are weighed per joint
    by how well each refills runs of that joint's own observed frames hidden on purpose
-   (:func:`validation_mask`): weights inversely proportional to the squared validation
-   error. ``long_gaps`` picks one estimate instead (``"chain"``, ``"regression"``, or
-   ``"lowrank"``, the iterated PCA of :mod:`handdb.gapfill.lowrank`).
+   (:func:`validation_mask` and, beside a leading or trailing gap,
+   :func:`edge_validation_mask`, which hides the frames next to the gap so that the trial
+   extrapolates as far as the gap does): weights inversely proportional to the squared
+   validation error. ``long_gaps`` picks one estimate instead (``"chain"``,
+   ``"regression"``, or ``"lowrank"``, the iterated PCA of :mod:`handdb.gapfill.lowrank`).
 5. Joints never observed are placed first, by the rest pose fitted to the observed joints
    of each frame, so that the other joints can lean on them.
 6. Kinematic refinement (:mod:`handdb.gapfill.refine`): filled points are pulled back
@@ -206,6 +208,55 @@ def _hide_runs(hidden: np.ndarray, joint: np.ndarray, length: np.ndarray, start:
             hidden[first:stop, j] = True
 
 
+def edge_validation_mask(missing: np.ndarray, gaps: Gaps) -> np.ndarray:
+    """Hide, beside each leading or trailing gap, the observed frames next to it.
+
+    A trailing gap of ``L`` frames is extrapolated ``L`` frames past the joint's last
+    observed frame; hiding the ``L`` observed frames before it (all but the first of their
+    run) makes a trial that extrapolates as far, from an earlier frame, with the truth
+    known. Likewise after a leading gap (all but the last of the run). A run between a
+    leading and a trailing gap is split at its middle frame, which stays observed, each
+    trial hiding frames on its own side only. Whole-clip gaps get no run.
+
+    Parameters
+    ----------
+    missing
+        ``(T, J) bool``.
+    gaps
+        The gaps to be filled (of ``missing``).
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(T, J) bool``: the points to hide (never a missing point).
+    """
+    hidden = np.zeros_like(missing)
+    edges = gaps.select((gaps.leading | gaps.trailing) & ~gaps.whole_clip)
+    if not len(edges):
+        return hidden
+    n_frames = missing.shape[0]
+    everything = find_gaps(missing)
+    for joint, start, stop, leading in zip(edges.joint, edges.start, edges.stop,
+                                           edges.leading, strict=True):
+        own = everything.select(everything.joint == joint)
+        length = stop - start
+        if leading:
+            later = own.start > stop
+            end = int(own.start[later][0]) if later.any() else n_frames
+            # A run between a leading and a trailing gap is shared: each trial keeps to its
+            # half, the middle frame observed.
+            shared = later.any() and own.stop[later][0] == n_frames
+            last = stop + (end - stop) // 2 if shared else end - 1
+            hidden[stop:min(stop + length, last), joint] = True
+        else:
+            earlier = own.stop < start
+            first = int(own.stop[earlier][-1]) if earlier.any() else 0
+            shared = earlier.any() and own.start[earlier][-1] == 0
+            kept = first + (start - first) // 2 if shared else first
+            hidden[max(start - length, kept + 1):start, joint] = True
+    return hidden
+
+
 def _long_gap_fill(
     local: np.ndarray, filled: np.ndarray, missing: np.ndarray, gaps: Gaps,
     skeleton: Skeleton, rule: str, variance: float,
@@ -216,14 +267,24 @@ def _long_gap_fill(
         blended[frame, joint] = estimate_long_gaps((rule,), local, filled, [(missing, gaps)],
                                                    skeleton, variance)[0][0]
         return blended
-    hidden = validation_mask(missing, gaps)
-    runs = find_gaps(hidden)
+    hidden = validation_mask(missing, gaps) | edge_validation_mask(missing, gaps)
+    trial_missing = missing | hidden
+    trial_gaps = find_gaps(trial_missing)
+    hidden_so_far = np.concatenate([np.zeros((1, missing.shape[1]), dtype=np.int64),
+                                    np.cumsum(hidden, axis=0)])
+    # The trials: the gaps holding a hidden point (a hidden run, or one merged with the real
+    # gap beside it), scored on their hidden points only.
+    trial_gaps = trial_gaps.select((hidden_so_far[trial_gaps.stop, trial_gaps.joint]
+                                    > hidden_so_far[trial_gaps.start, trial_gaps.joint])
+                                   & ~trial_gaps.whole_clip)
     trials, estimates = estimate_long_gaps(VALIDATED_ESTIMATES, local, filled,
-                                           [(missing | hidden, runs), (missing, gaps)],
+                                           [(trial_missing, trial_gaps), (missing, gaps)],
                                            skeleton, variance)
-    _, hidden_frame, hidden_joint = runs.frames()
-    truth = local[hidden_frame, hidden_joint]
-    errors = np.array([np.bincount(hidden_joint, np.sum((trial - truth) ** 2, axis=-1),
+    _, trial_frame, trial_joint = trial_gaps.frames()
+    scored = hidden[trial_frame, trial_joint]
+    truth = local[trial_frame[scored], trial_joint[scored]]
+    errors = np.array([np.bincount(trial_joint[scored],
+                                   np.sum((trial[scored] - truth) ** 2, axis=-1),
                                    minlength=missing.shape[1]) for trial in trials])
     inverse = 1.0 / np.maximum(errors, np.finfo(float).tiny)
     weights = np.where(hidden.any(axis=0), inverse / inverse.sum(axis=0), 1.0 / len(trials))
