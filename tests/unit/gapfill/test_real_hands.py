@@ -54,3 +54,34 @@ def test_smoothing_helps_on_a_real_glove_seen_through_a_noisy_detector(datasets)
         smoothed = scores if smoothed is None else smoothed + scores
         raw = unsmoothed if raw is None else raw + unsmoothed
     assert smoothed.rmse("auto") < 0.95 * raw.rmse("auto")
+
+
+def _ratio(datasets, case, mask, seeds):
+    """Best thesis method's RMSE over the default's, pooled over ``seeds`` of the mask."""
+    methods = ("auto", *datasets.thesis_methods())
+    total = None
+    for seed in seeds:
+        scores = datasets.score(case, mask, 0.0, methods, seed=seed)
+        total = scores if total is None else total + scores
+    return datasets.best_thesis(total)[1] / total.rmse("auto")
+
+
+@pytest.mark.parametrize("mask", ["thesis-table-4.2", "random-gaps"])
+def test_five_times_better_than_the_thesis_on_the_held_out_glove(datasets, mask):
+    assert _ratio(datasets, _glove_clip(datasets, "orthographic"), mask, range(2)) >= 5.0
+
+
+@pytest.mark.parametrize("mask", ["thesis-table-4.2", "random-gaps"])
+def test_five_times_better_than_the_thesis_on_the_dhg_capture(datasets, mask):
+    cases = [c for c in datasets.dhg_cases() if c.projection == "orthographic"]
+    if not cases:
+        pytest.skip(f"shared data not present: {datasets.DHG}")
+    assert _ratio(datasets, cases[0], mask, range(4)) >= 5.0
+
+
+@pytest.mark.parametrize("mask", ["thesis-table-4.2", "random-gaps"])
+def test_better_than_every_thesis_method_on_a_real_detectors_landmarks(datasets, mask):
+    cases = datasets.mediapipe_cases()
+    if not cases:
+        pytest.skip(f"shared data not present: {datasets.MEDIAPIPE}")
+    assert min(_ratio(datasets, case, mask, range(4)) for case in cases) >= 2.0
