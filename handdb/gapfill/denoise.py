@@ -42,6 +42,9 @@ MAD_TO_SIGMA = 1.4826
 FOURTH_DIFFERENCE_VARIANCE = 70.0
 #: Fourth differences the noise level's median is taken over, at most.
 NOISE_SAMPLES = 20_000
+#: Observed points Stein's risk of each window is estimated from, at most (every k-th
+#: frame of each run on longer clips).
+RISK_SAMPLES = 20_000
 
 
 def noise_level(uv: np.ndarray, missing: np.ndarray) -> float:
@@ -130,23 +133,25 @@ def denoise(uv: np.ndarray, missing: np.ndarray) -> tuple[np.ndarray, int]:
     if sigma < MIN_NOISE_PX:
         return uv, 0
     variance = sigma * sigma
+    stride = max(np.count_nonzero(~missing) // RISK_SAMPLES, 1)
     best_half, best_risk = 0, 0.0
     for half in SMOOTHING_HALF_WIDTHS:
-        change, trace = _smooth_runs(uv, missing, smoothing_weights(half), uv, False)
+        change, trace, count = _smooth_runs(uv, missing, smoothing_weights(half), uv, stride,
+                                            False)
         # Stein's risk minus that of no smoothing (n sigma^2), over both coordinates.
-        risk = change + 2.0 * variance * (2.0 * trace - 2.0 * np.count_nonzero(~missing))
+        risk = change + 2.0 * variance * (2.0 * trace - 2.0 * count)
         if risk < best_risk:
             best_half, best_risk = half, risk
     if best_half == 0:
         return uv, 0
     smoothed = uv.copy()
-    _smooth_runs(uv, missing, smoothing_weights(best_half), smoothed, True)
+    _smooth_runs(uv, missing, smoothing_weights(best_half), smoothed, 1, True)
     return smoothed, best_half
 
 
 @kernel
 def _smooth_runs(uv: np.ndarray, missing: np.ndarray, weights: np.ndarray,
-                 out: np.ndarray, write: bool) -> tuple[float, float]:
+                 out: np.ndarray, stride: int, write: bool) -> tuple[float, float, int]:
     """Smooth every observed run at least a window long into ``out``.
 
     Parameters
@@ -160,20 +165,26 @@ def _smooth_runs(uv: np.ndarray, missing: np.ndarray, weights: np.ndarray,
     out, write
         ``(T, J, 2) float64``: where the smoothed points are written, if ``write`` (else
         only the risk's terms are wanted).
+    stride
+        The risk's terms are summed over the frames that are multiples of ``stride`` (every
+        frame is written).
 
     Returns
     -------
     change
-        Sum of the squared changes of every observed coordinate, pixels squared.
+        Sum of the squared changes of the summed observed coordinates, pixels squared.
     trace
-        The trace of the smoother over one coordinate of every observed point (a point of
-        a run shorter than the window counts 1: it is kept).
+        The trace of the smoother over one coordinate of the summed observed points (a
+        point of a run shorter than the window counts 1: it is kept).
+    count
+        How many observed points were summed.
     """
     n_frames, n_joints = missing.shape
     width = weights.shape[0]
     half = width // 2
     change = 0.0
     trace = 0.0
+    count = 0
     for j in range(n_joints):
         t = 0
         while t < n_frames:
@@ -184,18 +195,24 @@ def _smooth_runs(uv: np.ndarray, missing: np.ndarray, weights: np.ndarray,
             while t < n_frames and not missing[t, j]:
                 t += 1
             stop = t
-            if stop - start < width:
-                trace += stop - start
-                continue
             for frame in range(start, stop):
+                summed = frame % stride == 0
+                count += summed
+                if stop - start < width:
+                    trace += summed
+                    continue
+                if not (summed or write):
+                    continue
                 first = min(max(frame - half, start), stop - width)
                 row = frame - first
-                trace += weights[row, row]
+                if summed:
+                    trace += weights[row, row]
                 for k in range(2):
                     value = 0.0
                     for i in range(width):
                         value += weights[row, i] * uv[first + i, j, k]
-                    change += (value - uv[frame, j, k]) ** 2
+                    if summed:
+                        change += (value - uv[frame, j, k]) ** 2
                     if write:
                         out[frame, j, k] = value
-    return change, trace
+    return change, trace, count
