@@ -41,13 +41,14 @@ def test_a_never_seen_joint_and_frames_observing_nothing_are_refused(rapid_clip,
         assert part in message
 
 
-@pytest.mark.parametrize("empty", [slice(0, 0), slice(100, 105)])
+@pytest.mark.parametrize(("never_seen", "empty"), [("thumb_cmc", slice(0, 0)),
+                                                   (None, slice(100, 105))])
 def test_the_refusal_needs_both_a_never_seen_joint_and_an_empty_frame(rapid_clip, mediapipe,
-                                                                      empty):
+                                                                      never_seen, empty):
     observed = np.ones(rapid_clip.uv.shape[:2], dtype=bool)
     observed[empty] = False
-    if empty.stop == 0:
-        observed[:, mediapipe.index("thumb_cmc")] = False
+    if never_seen:
+        observed[:, mediapipe.index(never_seen)] = False
     filled = fill_gaps(rapid_clip.uv, observed, mediapipe, "auto").uv
     assert np.isfinite(filled).all()
 
