@@ -89,6 +89,15 @@ class ClipDataError(HanddbError, ValueError):
     """
 
 
+class GapFillError(ClipDataError):
+    """Gap filling cannot complete a clip's tracks from what its data holds.
+
+    The message names the method and what the clip lacks (``auto`` places a joint never
+    observed from each frame's observed points, so it needs every frame to observe one),
+    and what to do. The build refuses the clip at the gap-filling stage.
+    """
+
+
 class RegistryError(HanddbError):
     """A registry entry added twice under one name."""
 

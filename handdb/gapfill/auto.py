@@ -1,5 +1,8 @@
 """``auto``, the default: per gap, the method that suits it, in the palm frame, then refined.
 
+0. Detector jitter is measured and, where a smoothing window lowers Stein's risk, the
+   observed tracks are smoothed (:mod:`handdb.gapfill.denoise`); everything below reads
+   the smoothed tracks, and the observed points are returned as they were.
 1. The palm's affine motion is fitted frame by frame and every track is expressed in the
    palm frame (:mod:`handdb.gapfill.palm_frame`), where only finger bending is left to
    bridge.
@@ -11,9 +14,11 @@
    the joint's angle changing linearly across the gap) and a ridge regression on the finger
    joints seen throughout the gap (:mod:`handdb.gapfill.regression`), are weighed per joint
    by how well each refills runs of that joint's own observed frames hidden on purpose
-   (:func:`validation_mask`): weights inversely proportional to the squared validation
-   error. ``long_gaps`` picks one estimate instead (``"chain"``, ``"regression"``, or
-   ``"lowrank"``, the iterated PCA of :mod:`handdb.gapfill.lowrank`).
+   (:func:`validation_mask` and, beside a leading or trailing gap,
+   :func:`edge_validation_mask`, which hides the frames next to the gap so that the trial
+   extrapolates as far as the gap does): weights inversely proportional to the squared
+   validation error. ``long_gaps`` picks one estimate instead (``"chain"``,
+   ``"regression"``, or ``"lowrank"``, the iterated PCA of :mod:`handdb.gapfill.lowrank`).
 5. Joints never observed are placed first, by the rest pose fitted to the observed joints
    of each frame, so that the other joints can lean on them.
 6. Kinematic refinement (:mod:`handdb.gapfill.refine`): filled points are pulled back
@@ -34,6 +39,8 @@ from collections.abc import Sequence
 import numpy as np
 
 from handdb.compiled import kernel
+from handdb.errors import GapFillError, ParameterError
+from handdb.gapfill.denoise import denoise
 from handdb.gapfill.gaps import Gaps, find_gaps, mask_points
 from handdb.gapfill.interpolate import interpolate_gaps
 from handdb.gapfill.lowrank import DEFAULT_VARIANCE, blend_to_edges, lowrank_reconstruct
@@ -53,6 +60,9 @@ ESTIMATES = ("chain", "regression", "lowrank")
 LONG_GAP_RULES = (*ESTIMATES, "validated")
 #: The estimates weighed by ``"validated"``.
 VALIDATED_ESTIMATES = ("chain", "regression")
+
+#: Runs of frames with no observed point named in a refusal, at most.
+SHOWN_RUNS = 3
 
 #: The labels of the points ``auto`` fills, by the rule that filled them.
 RULE_LABELS = ("rigid", "pchip", *LONG_GAP_RULES, "rest-pose")
@@ -198,6 +208,55 @@ def _hide_runs(hidden: np.ndarray, joint: np.ndarray, length: np.ndarray, start:
             hidden[first:stop, j] = True
 
 
+def edge_validation_mask(missing: np.ndarray, gaps: Gaps) -> np.ndarray:
+    """Hide, beside each leading or trailing gap, the observed frames next to it.
+
+    A trailing gap of ``L`` frames is extrapolated ``L`` frames past the joint's last
+    observed frame; hiding the ``L`` observed frames before it (all but the first of their
+    run) makes a trial that extrapolates as far, from an earlier frame, with the truth
+    known. Likewise after a leading gap (all but the last of the run). A run between a
+    leading and a trailing gap is split at its middle frame, which stays observed, each
+    trial hiding frames on its own side only. Whole-clip gaps get no run.
+
+    Parameters
+    ----------
+    missing
+        ``(T, J) bool``.
+    gaps
+        The gaps to be filled (of ``missing``).
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(T, J) bool``: the points to hide (never a missing point).
+    """
+    hidden = np.zeros_like(missing)
+    edges = gaps.select((gaps.leading | gaps.trailing) & ~gaps.whole_clip)
+    if not len(edges):
+        return hidden
+    n_frames = missing.shape[0]
+    everything = find_gaps(missing)
+    for joint, start, stop, leading in zip(edges.joint, edges.start, edges.stop,
+                                           edges.leading, strict=True):
+        own = everything.select(everything.joint == joint)
+        length = stop - start
+        if leading:
+            later = own.start > stop
+            end = int(own.start[later][0]) if later.any() else n_frames
+            # A run between a leading and a trailing gap is shared: each trial keeps to its
+            # half, the middle frame observed.
+            shared = later.any() and own.stop[later][0] == n_frames
+            last = stop + (end - stop) // 2 if shared else end - 1
+            hidden[stop:min(stop + length, last), joint] = True
+        else:
+            earlier = own.stop < start
+            first = int(own.stop[earlier][-1]) if earlier.any() else 0
+            shared = earlier.any() and own.start[earlier][-1] == 0
+            kept = first + (start - first) // 2 if shared else first
+            hidden[max(start - length, kept + 1):start, joint] = True
+    return hidden
+
+
 def _long_gap_fill(
     local: np.ndarray, filled: np.ndarray, missing: np.ndarray, gaps: Gaps,
     skeleton: Skeleton, rule: str, variance: float,
@@ -208,19 +267,73 @@ def _long_gap_fill(
         blended[frame, joint] = estimate_long_gaps((rule,), local, filled, [(missing, gaps)],
                                                    skeleton, variance)[0][0]
         return blended
-    hidden = validation_mask(missing, gaps)
-    runs = find_gaps(hidden)
+    hidden = validation_mask(missing, gaps) | edge_validation_mask(missing, gaps)
+    trial_missing = missing | hidden
+    trial_gaps = find_gaps(trial_missing)
+    hidden_so_far = np.concatenate([np.zeros((1, missing.shape[1]), dtype=np.int64),
+                                    np.cumsum(hidden, axis=0)])
+    # The trials: the gaps holding a hidden point (a hidden run, or one merged with the real
+    # gap beside it), scored on their hidden points only.
+    trial_gaps = trial_gaps.select((hidden_so_far[trial_gaps.stop, trial_gaps.joint]
+                                    > hidden_so_far[trial_gaps.start, trial_gaps.joint])
+                                   & ~trial_gaps.whole_clip)
     trials, estimates = estimate_long_gaps(VALIDATED_ESTIMATES, local, filled,
-                                           [(missing | hidden, runs), (missing, gaps)],
+                                           [(trial_missing, trial_gaps), (missing, gaps)],
                                            skeleton, variance)
-    _, hidden_frame, hidden_joint = runs.frames()
-    truth = local[hidden_frame, hidden_joint]
-    errors = np.array([np.bincount(hidden_joint, np.sum((trial - truth) ** 2, axis=-1),
+    _, trial_frame, trial_joint = trial_gaps.frames()
+    scored = hidden[trial_frame, trial_joint]
+    truth = local[trial_frame[scored], trial_joint[scored]]
+    errors = np.array([np.bincount(trial_joint[scored],
+                                   np.sum((trial[scored] - truth) ** 2, axis=-1),
                                    minlength=missing.shape[1]) for trial in trials])
     inverse = 1.0 / np.maximum(errors, np.finfo(float).tiny)
     weights = np.where(hidden.any(axis=0), inverse / inverse.sum(axis=0), 1.0 / len(trials))
     blended[frame, joint] = np.sum(weights[:, joint, None] * np.stack(estimates), axis=0)
     return blended
+
+
+def check_placeable(missing: np.ndarray, skeleton: Skeleton, never_seen: np.ndarray) -> None:
+    """Refuse a clip whose never-observed joints cannot be placed in every frame.
+
+    A joint never observed is placed in each frame by the rest pose fitted to that frame's
+    observed points (:func:`~handdb.gapfill.rigid.place_from_rest_pose`); a frame that
+    observes no point gives nothing to fit, and its placed points would be NaN, which the
+    regressions downstream cannot solve with (numpy's "Singular matrix"). Labelled frames
+    sparse in time (DeepLabCut's labelled images at their frame numbers) are such clips.
+
+    Parameters
+    ----------
+    missing
+        ``(T, J) bool``.
+    skeleton
+        The clip's skeleton.
+    never_seen
+        ``(K,) int64``: the joints missing in every frame.
+
+    Raises
+    ------
+    GapFillError
+        If ``never_seen`` is not empty and some frame observes no point; the message names
+        the joints and the first runs of empty frames.
+    """
+    empty = missing.all(axis=1)
+    if not never_seen.size or not empty.any():
+        return
+    runs = find_gaps(empty[:, None])
+    shown = ", ".join(f"{start}-{stop - 1}" if stop - start > 1 else f"{start}"
+                      for start, stop in zip(runs.start[:SHOWN_RUNS], runs.stop[:SHOWN_RUNS],
+                                             strict=True))
+    more = f" and {len(runs) - SHOWN_RUNS} more runs" if len(runs) > SHOWN_RUNS else ""
+    names = ", ".join(skeleton.joints[j] for j in never_seen)
+    raise GapFillError(
+        f"gap filling by 'auto' cannot place {names}: never observed in the clip, they are "
+        "placed in each frame from the rest pose fitted to the points the frame observes, "
+        f"and {int(empty.sum())} of {empty.size} frames observe no point (frames {shown}"
+        f"{more}). Frames sparse in time (labelled images at their frame numbers) are not "
+        "a track: number them in order (DeepLabCut: \"frame_from\": \"row\") or drop the "
+        "empty frames; or map a body part to each of those joints; or fill with 'rigid', "
+        "which flags what it cannot place as unfilled"
+    )
 
 
 def fill_auto(
@@ -233,6 +346,7 @@ def fill_auto(
     variance: float = DEFAULT_VARIANCE,
     bone_lengths: dict[str, float] | None = None,
     scale: float | np.ndarray | None = None,
+    smooth: bool = True,
 ) -> MethodOutput:
     """Fill every gap with the rule that suits it (see the module docstring).
 
@@ -249,17 +363,32 @@ def fill_auto(
     bone_lengths, scale
         Optional 3D bone lengths (child joint -> length, clip units) and the image scale
         (pixels per unit, scalar or ``(T,)``) that bound the projected bones in refinement.
+    smooth
+        Fill from the observed tracks smoothed against detector jitter
+        (:func:`~handdb.gapfill.denoise.denoise`; the observed points are returned as they
+        were), or from the tracks as observed.
+
+    Raises
+    ------
+    ParameterError
+        If ``long_gaps`` is not a rule.
+    GapFillError
+        If a joint is never observed and some frame observes no point: the joint cannot
+        be placed there (see :func:`check_placeable`).
     """
     if long_gaps not in LONG_GAP_RULES:
-        raise ValueError(
+        raise ParameterError(
             f"long_gaps must be one of {', '.join(LONG_GAP_RULES)}; got '{long_gaps}'"
         )
     gaps = find_gaps(missing)
     never_seen = np.unique(gaps.joint[gaps.whole_clip])
-    placed = place_from_rest_pose(uv, missing, skeleton, never_seen) if never_seen.size else uv
+    check_placeable(missing, skeleton, never_seen)
+    smoothed = denoise(uv, missing)[0] if smooth else uv
+    placed = (place_from_rest_pose(smoothed, missing, skeleton, never_seen) if never_seen.size
+              else smoothed)
     unknown = missing.copy()
     unknown[:, never_seen] = False
-    motion = palm_motion(uv, missing, skeleton)
+    motion = palm_motion(smoothed, missing, skeleton)
     local = placed if motion is None else to_palm_frame(placed, motion)
 
     palm = palm_joints(skeleton)[gaps.joint]
@@ -267,15 +396,14 @@ def fill_auto(
     partial = ~gaps.whole_clip
     by_model = partial & ~palm & ~short
 
-    filled = interpolate_gaps(local, unknown, "pchip")
+    filled_local = interpolate_gaps(local, unknown, "pchip")
     if by_model.any():
-        filled = _long_gap_fill(local, filled, unknown, gaps.select(by_model), skeleton,
-                                long_gaps, variance)
-    if motion is not None:
-        frame, joint = mask_points(unknown)
-        local_filled = filled[frame, joint]
-        filled = placed.copy()
-        filled[frame, joint] = to_image(local_filled, motion, frame)
+        filled_local = _long_gap_fill(local, filled_local, unknown, gaps.select(by_model),
+                                      skeleton, long_gaps, variance)
+    filled = np.where(missing[..., None], placed, uv)
+    frame, joint = mask_points(unknown)
+    filled[frame, joint] = (filled_local[frame, joint] if motion is None
+                            else to_image(filled_local[frame, joint], motion, frame))
 
     labels = np.zeros(missing.shape, dtype=f"<U{max(map(len, RULE_LABELS))}")
     for rule, chosen in (("rigid", partial & palm), ("pchip", partial & ~palm & short),

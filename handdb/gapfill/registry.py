@@ -183,6 +183,10 @@ def fill_gaps(
     ------
     UnknownNameError
         If ``method`` is not registered.
+    GapFillError
+        If the method cannot fill the clip from what it observes (``auto``: a joint never
+        observed in a clip with frames observing no point,
+        :func:`~handdb.gapfill.auto.check_placeable`).
     ValueError
         If the shapes of ``uv``, ``observed`` and ``skeleton`` disagree.
     """

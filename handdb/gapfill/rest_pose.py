@@ -13,17 +13,16 @@ from functools import cache
 import numpy as np
 
 from handdb.hand.shape import mean_shape
-from handdb.hand.skeletons import Skeleton, load_skeleton
+from handdb.hand.skeletons import Skeleton
 
 #: Image axes of the hand frame's ``x`` and ``y`` seen palm first, fingers up.
 _IMAGE_AXES = np.array([[1.0, 0.0], [0.0, -1.0], [0.0, 0.0]])
 
 
 @cache
-def _rest(name: str) -> np.ndarray:
-    skeleton = load_skeleton(name)
+def _rest(joints: tuple[str, ...]) -> np.ndarray:
     shape = mean_shape()
-    points = shape.positions(skeleton) - shape.point("wrist")
+    points = np.stack([shape.point(joint) for joint in joints]) - shape.point("wrist")
     unit = np.linalg.norm(shape.point("middle_mcp") - shape.point("wrist"))
     rest = points @ _IMAGE_AXES / unit
     rest.flags.writeable = False
@@ -38,4 +37,4 @@ def rest_pose_2d(skeleton: Skeleton) -> np.ndarray:
     SkeletonError
         If a joint has no place in the hand shape.
     """
-    return _rest(skeleton.name).copy()
+    return _rest(skeleton.joints).copy()

@@ -3,7 +3,7 @@ import pytest
 from scipy.interpolate import PchipInterpolator
 
 from handdb.gapfill import METHODS, UNFILLED, fill_gaps
-from handdb.gapfill.auto import VALIDATION_GAPS, validation_mask
+from handdb.gapfill.auto import VALIDATION_GAPS, edge_validation_mask, validation_mask
 from handdb.gapfill.gaps import find_gaps
 from handdb.gapfill.interpolate import interpolate_gaps
 from handdb.gapfill.lowrank import lowrank_reconstruct
@@ -204,6 +204,24 @@ def test_validation_runs_are_observed_runs_as_long_as_the_joints_median_gap():
     around = np.pad(missing | hidden, ((1, 1), (0, 0)), constant_values=True)
     assert not around[runs.start, runs.joint].any()          # observed just before each run
     assert not around[runs.stop + 1, runs.joint].any()       # and just after it
+
+
+def test_edge_validation_hides_as_many_frames_beside_an_edge_gap_as_it_has():
+    missing = np.zeros((100, 5), dtype=bool)
+    missing[80:, 0] = True                  # trailing, 20 frames
+    missing[:15, 1] = True                  # leading, 15 frames
+    missing[:70, 2] = True                  # leading, longer than the run after it
+    missing[90:, 2] = True
+    missing[40:50, 3] = True                # interior: no edge run
+    missing[:, 4] = True                    # whole clip: none
+    gaps = find_gaps(missing)
+    hidden = edge_validation_mask(missing, gaps)
+    assert not (hidden & missing).any()
+    assert np.flatnonzero(hidden[:, 0]).tolist() == list(range(60, 80))
+    assert np.flatnonzero(hidden[:, 1]).tolist() == list(range(15, 30))
+    # the run 70-89 between two edge gaps is split, its middle frame (80) observed
+    assert np.flatnonzero(hidden[:, 2]).tolist() == [*range(70, 80), *range(81, 90)]
+    assert not hidden[:, 3:].any()
 
 
 def _refine_bone_by_bone(uv, missing, skeleton, bounds):

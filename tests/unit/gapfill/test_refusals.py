@@ -1,0 +1,101 @@
+"""Clips gap filling cannot complete are refused with what they lack, never crash (issue 15).
+
+Real labelled frames sparse in time (DeepLabCut's labelled images at their image numbers)
+crashed ``auto`` with numpy's ``LinAlgError: Singular matrix`` in the regression."""
+
+import json
+import re
+import shutil
+
+import numpy as np
+import pytest
+
+from handdb.errors import ClipDataError, GapFillError, ParameterError
+from handdb.gapfill import UNFILLED, fill_gaps
+from handdb.ingest import discover, load_clip
+
+#: The body parts of the DeepLabCut hands project, as canonical joints: no thumb_cmc, no
+#: finger dip.
+BRICE_MAP = {"wristCenter": "wrist", "thumbStart": "thumb_mcp", "thumbCenter": "thumb_ip",
+             "thumbEnd": "thumb_tip"} | {
+    f"{finger}{part}": f"{finger}_{joint}" for finger in ("index", "middle", "ring", "little")
+    for part, joint in (("Start", "mcp"), ("Center", "pip"), ("End", "tip"))}
+DLC = "dlc-hands/CollectedData_Brice.csv"
+
+
+def _hidden_joint_and_empty_frames(clip, skeleton, empty):
+    observed = np.ones(clip.uv.shape[:2], dtype=bool)
+    observed[:, skeleton.index("thumb_cmc")] = False
+    observed[empty] = False
+    return observed
+
+
+def test_a_never_seen_joint_and_frames_observing_nothing_are_refused(rapid_clip, mediapipe):
+    observed = _hidden_joint_and_empty_frames(rapid_clip, mediapipe, slice(100, 105))
+    with pytest.raises(GapFillError) as info:
+        fill_gaps(rapid_clip.uv, observed, mediapipe, "auto")
+    message = str(info.value)
+    assert isinstance(info.value, ClipDataError)
+    for part in ("'auto'", "thumb_cmc", "5 of 400 frames observe no point", "frames 100-104",
+                 "'rigid'"):
+        assert part in message
+
+
+@pytest.mark.parametrize(("never_seen", "empty"), [("thumb_cmc", slice(0, 0)),
+                                                   (None, slice(100, 105))])
+def test_the_refusal_needs_both_a_never_seen_joint_and_an_empty_frame(rapid_clip, mediapipe,
+                                                                      never_seen, empty):
+    observed = np.ones(rapid_clip.uv.shape[:2], dtype=bool)
+    observed[empty] = False
+    if never_seen:
+        observed[:, mediapipe.index(never_seen)] = False
+    filled = fill_gaps(rapid_clip.uv, observed, mediapipe, "auto").uv
+    assert np.isfinite(filled).all()
+
+
+def test_rigid_fills_the_refused_clip_and_flags_what_it_cannot_place(rapid_clip, mediapipe):
+    observed = _hidden_joint_and_empty_frames(rapid_clip, mediapipe, slice(100, 105))
+    result = fill_gaps(rapid_clip.uv, observed, mediapipe, "rigid")
+    unfilled = [f for f in result.flags if f.kind == UNFILLED]
+    assert {(f.joint, f.start, f.stop) for f in unfilled} == {("thumb_cmc", 100, 105)}
+
+
+def test_an_unknown_long_gap_rule_is_a_parameter_error(rapid_clip, mediapipe):
+    observed = np.ones(rapid_clip.uv.shape[:2], dtype=bool)
+    observed[50:80, mediapipe.index("index_tip")] = False
+    with pytest.raises(ParameterError, match="long_gaps must be one of"):
+        fill_gaps(rapid_clip.uv, observed, mediapipe, "auto", long_gaps="spline")
+
+
+def _dlc_hand(real_tools, tmp_path, individual):
+    """The DeepLabCut file's labelled images of one hand, by row, and their image numbers."""
+    shutil.copy(real_tools / DLC, tmp_path / "clip.dlc.csv")
+    (tmp_path / "clip.clip.json").write_text(json.dumps({
+        "skeleton": "mediapipe21", "hand": "right", "fps": 30, "subject": "s01",
+        "units": "mm", "camera": {"model": "orthographic"}, "individual": individual,
+        "frame_from": "row", "joint_map": BRICE_MAP}))
+    (entry,) = discover(tmp_path).clips
+    clip = load_clip(entry)
+    images = [line.split(",", 1)[0] for line in (real_tools / DLC).read_text().splitlines()[4:]]
+    numbers = np.array([int(re.search(r"(\d+)\D*$", image).group(1)) for image in images])
+    return clip, numbers
+
+
+@pytest.mark.parametrize("individual", ["leftHand", "rightHand"])
+def test_real_labelled_frames_sparse_in_time_are_refused(real_tools, tmp_path, individual):
+    clip, numbers = _dlc_hand(real_tools, tmp_path, individual)
+    uv = np.full((numbers.max() + 1, *clip.uv.shape[1:]), np.nan)
+    uv[numbers] = clip.uv
+    observed = np.isfinite(uv).all(axis=-1)
+    assert observed.any(axis=1).sum() == len(numbers) < len(uv) / 20
+    with pytest.raises(GapFillError, match="'auto' cannot place thumb_cmc, index_dip"):
+        fill_gaps(uv, observed, clip.skeleton, "auto")
+
+
+@pytest.mark.parametrize("individual", ["leftHand", "rightHand"])
+def test_real_labelled_frames_in_row_order_are_filled(real_tools, tmp_path, individual):
+    clip, _ = _dlc_hand(real_tools, tmp_path, individual)
+    observed = np.isfinite(clip.uv).all(axis=-1)
+    filled = fill_gaps(clip.uv, observed, clip.skeleton, "auto").uv
+    assert np.isfinite(filled).all()
+    np.testing.assert_array_equal(filled[observed], clip.uv[observed])
