@@ -114,10 +114,22 @@ class Store:
         path = self.path(*parts)
         return path if self.is_local else self.fs.unstrip_protocol(path)
 
+    def files_in(self, folder: str, suffix: str) -> list[str]:
+        """Files directly in ``folder`` (a path on :attr:`fs`) named ``*<suffix>``, sorted.
+
+        The folder is listed, never globbed, so a database path holding pattern characters
+        (``db[1]``) names only itself. A folder that does not exist holds no file.
+        """
+        try:
+            entries = self.fs.ls(folder, detail=True)
+        except (FileNotFoundError, NotADirectoryError):
+            return []
+        return sorted(entry["name"] for entry in entries
+                      if entry["type"] == "file" and entry["name"].endswith(suffix))
+
     def table_files(self, table: str) -> list[str]:
         """Committed Parquet files of ``table``, sorted."""
-        pattern = self.path(table, f"*{PARQUET_SUFFIX}")
-        return sorted(self.fs.glob(pattern))
+        return self.files_in(self.path(table), PARQUET_SUFFIX)
 
     def partition_keys(self, table: str) -> list[str]:
         """Keys of the committed partitions of ``table``, sorted."""
@@ -204,8 +216,13 @@ class Store:
                 zip(committed["clip_id"], committed["stage_keys"], strict=True)}
 
     def remove_temporaries(self) -> int:
-        """Delete files left half-written by an interrupted build; return how many."""
-        leftovers = self.fs.glob(self.path("*", f"*{TMP_SUFFIX}"))
+        """Delete files left half-written by an interrupted build; return how many.
+
+        Only the table folders of this database are listed: temporaries are written nowhere
+        else.
+        """
+        leftovers = [path for table in tables.table_names()
+                     for path in self.files_in(self.path(table), TMP_SUFFIX)]
         for path in leftovers:
             self.fs.rm(path)
         return len(leftovers)

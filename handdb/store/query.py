@@ -1,25 +1,41 @@
 """DuckDB over the database: one view per table, named like the table.
 
-Views read the Parquet files in place (``read_parquet`` over ``<db>/<table>/*.parquet``);
-a table with no file yet is an empty view with the contract's columns, so every query
-that names a table works on any database. Derived views in ``schemas/views/*.sql`` are
-created after the table views.
+Each table's view scans an Arrow dataset of the table's Parquet files, listed when the
+connection is made (a folder listing, never a glob: a database path may hold pattern
+characters); the files are read in place, lazily, in the table's contract schema. A table
+with no file yet is an empty view with the contract's columns, so every query that names a
+table works on any database. Derived views in ``schemas/views/*.sql`` are created after the
+table views.
 """
 
 from __future__ import annotations
 
 import duckdb
 import pyarrow as pa
+import pyarrow.dataset as ds
+import pyarrow.fs as pafs
 
 from handdb.paths import SCHEMAS_DIR
 from handdb.store import tables
-from handdb.store.database import PARQUET_SUFFIX, Store
+from handdb.store.database import Store
 
 VIEWS_DIR = SCHEMAS_DIR / "views"
 
 
-def _quote(text: str) -> str:
-    return "'" + text.replace("'", "''") + "'"
+def arrow_filesystem(store: Store) -> pafs.FileSystem:
+    """The store's filesystem as Arrow reads it."""
+    if store.is_local:
+        return pafs.LocalFileSystem()
+    return pafs.PyFileSystem(pafs.FSSpecHandler(store.fs))
+
+
+def table_rows(store: Store, table: str) -> ds.Dataset | pa.Table:
+    """The committed rows of ``table``: a dataset over its files, or an empty table."""
+    files = store.table_files(table)
+    if not files:
+        return tables.empty(table)
+    return ds.dataset(files, schema=tables.schema(table), format="parquet",
+                      filesystem=arrow_filesystem(store))
 
 
 def connect(db: str | Store, *, database: str = ":memory:") -> duckdb.DuckDBPyConnection:
@@ -34,18 +50,9 @@ def connect(db: str | Store, *, database: str = ":memory:") -> duckdb.DuckDBPyCo
     """
     store = db if isinstance(db, Store) else Store(str(db))
     con = duckdb.connect(database)
-    if not store.is_local:
-        con.register_filesystem(store.fs)
     for name in tables.table_names():
-        if store.table_files(name):
-            pattern = store.uri(name, f"*{PARQUET_SUFFIX}")
-            con.execute(
-                f"CREATE OR REPLACE VIEW {name} AS SELECT * FROM "
-                f"read_parquet({_quote(pattern)}, union_by_name = true)"
-            )
-        else:
-            con.register(f"_empty_{name}", tables.empty(name))
-            con.execute(f"CREATE OR REPLACE VIEW {name} AS SELECT * FROM _empty_{name}")
+        con.register(f"_rows_{name}", table_rows(store, name))
+        con.execute(f"CREATE OR REPLACE VIEW {name} AS SELECT * FROM _rows_{name}")
     for sql in sorted(VIEWS_DIR.glob("*.sql")):
         con.execute(sql.read_text())
     return con
