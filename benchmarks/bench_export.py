@@ -15,9 +15,9 @@ from pathlib import Path
 
 from handdb.export.bvh import export_clip_bvh
 from handdb.export.mesh import hand_mesh, posed_vertices
-from handdb.export.rotations import bone_length_array, joint_rotations
+from handdb.export.rotations import joint_rotations
 from handdb.export.usd import export_clip_usd
-from handdb.hand.skeletons import load_skeleton
+from handdb.hand.skeletons import bone_length_array, load_skeleton
 from handdb.synthetic import synthesize_clip
 
 SKINNED_FRAMES = 1000

@@ -11,7 +11,8 @@ from __future__ import annotations
 import sys
 import time
 
-from handdb.synthetic import MOTIONS, forward_kinematics, make_hand, make_motion, synthesize_clip
+from handdb.hand.model import forward_kinematics
+from handdb.synthetic import MOTIONS, make_hand, make_motion, model_poses, synthesize_clip
 
 
 def frames_per_second(call, n_frames: int, repeats: int = 3) -> float:
@@ -31,8 +32,8 @@ def main(n_frames: int) -> None:
                 lambda m=motion, c=camera: synthesize_clip(m, n_frames, camera=c), n_frames)
             print(f"synthesize_clip {motion:>7} {camera:>12}: {rate:12,.0f} frames/s")
     model, motion = make_hand(), make_motion("random", n_frames)
-    rate = frames_per_second(
-        lambda: forward_kinematics(model, motion.angles, motion.root_rotation), n_frames)
+    poses = model_poses(model, motion.angles, motion.root_rotation)
+    rate = frames_per_second(lambda: forward_kinematics(model, poses), n_frames)
     print(f"forward_kinematics alone (21 joints):      {rate:12,.0f} frames/s")
 
 

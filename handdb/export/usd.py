@@ -37,7 +37,8 @@ import numpy as np
 from pxr import Gf, Sdf, Usd, UsdGeom, UsdSkel, UsdUtils, Vt
 from scipy.spatial.transform import Rotation
 
-from handdb.clip import HANDS, METERS_PER_UNIT
+from handdb.checks import check_hand, mm_per_unit
+from handdb.clip import METERS_PER_UNIT
 from handdb.errors import ParameterError, StageError
 from handdb.export.mesh import INFLUENCES, hand_mesh
 from handdb.export.rotations import (
@@ -253,10 +254,8 @@ def export_clip_usd(
     path = Path(path)
     if path.suffix not in (*LAYER_SUFFIXES, USDZ_SUFFIX):
         raise ParameterError(f"{path}: the suffix must be one of {(*LAYER_SUFFIXES, USDZ_SUFFIX)}")
-    if units not in METERS_PER_UNIT:
-        raise ParameterError(f"units '{units}' is not one of {tuple(METERS_PER_UNIT)}")
-    if hand not in HANDS:
-        raise ParameterError(f"hand '{hand}' is not one of {HANDS}")
+    mm_per_unit(units)
+    check_hand(hand)
     if not fps > 0:
         raise ParameterError(f"fps must be positive, got {fps}")
     xyz = np.asarray(xyz, dtype=np.float64)

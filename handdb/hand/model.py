@@ -31,6 +31,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 from scipy.spatial.transform import Rotation
 
+from handdb.checks import check_hand
 from handdb.errors import SkeletonError
 from handdb.hand import anatomy
 from handdb.hand.anatomy import AXES, JOINT_AXES, MOVING_JOINT
@@ -54,7 +55,6 @@ LIMIT_MARGIN_DEG = 20.0
 #: Reflection that turns the right-hand model into a left hand.
 MIRROR_X = np.diag([-1.0, 1.0, 1.0])
 
-HANDS = ("right", "left")
 
 
 @dataclass(frozen=True)
@@ -179,12 +179,13 @@ def build_hand_model(hand: str = "right", bone_lengths: dict[str, float] | None 
 
     Raises
     ------
+    ParameterError
+        If ``hand`` is not a hand.
     SkeletonError
-        If ``hand`` is not a hand, a named bone is not one of the skeleton's, or the
-        skeleton does not give the model its 33 degrees of freedom.
+        If a named bone is not one of the skeleton's, or the skeleton does not give the
+        model its 33 degrees of freedom.
     """
-    if hand not in HANDS:
-        raise SkeletonError(f"hand must be 'right' or 'left', got {hand!r}")
+    check_hand(hand)
     skel = load_skeleton(skeleton) if isinstance(skeleton, str) else skeleton
     shape = shape if shape is not None else mean_shape().scaled(units_per_mm)
     given = bone_lengths or {}

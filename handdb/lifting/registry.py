@@ -6,7 +6,8 @@ from typing import Any, Protocol
 
 import numpy as np
 
-from handdb.clip import HANDS, Camera
+from handdb.checks import check_hand
+from handdb.clip import Camera
 from handdb.errors import BoneLengthError
 from handdb.hand.skeletons import Skeleton
 from handdb.lifting.result import LiftResult
@@ -47,8 +48,7 @@ def _check_inputs(uv: np.ndarray, skeleton: Skeleton, bone_lengths: np.ndarray,
     if bad:
         raise BoneLengthError(f"bone lengths must be positive and finite; missing or invalid "
                               f"for {', '.join(bad)} (skeleton '{skeleton.name}')")
-    if hand not in HANDS:
-        raise ValueError(f"hand must be one of {', '.join(HANDS)}, got {hand!r}")
+    check_hand(hand)
 
 
 def lift(

@@ -26,7 +26,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import least_squares
 
-from handdb.clip import METERS_PER_UNIT
+from handdb.checks import mm_per_unit
 from handdb.hand.model import N_DOF, HandModel, forward_kinematics
 from handdb.lengths.bone_lengths import BoneLengths
 from handdb.lengths.ratios import bone_ratios, joint_ratios, table1_measurements
@@ -276,14 +276,14 @@ def calibrated_bone_lengths(calibration: Calibration, units: str) -> BoneLengths
     units
         The clip's length unit; lengths and residuals are given in it.
     """
-    mm_per_unit = METERS_PER_UNIT[units] * 1000.0
+    scale = mm_per_unit(units)
     skeleton = calibration.model.skeleton
     child = skeleton.bones[:, 1]
     lengths = np.full(skeleton.n_joints, np.nan)
     residuals = np.full(skeleton.n_joints, np.nan)
     n_frames = np.zeros(skeleton.n_joints, dtype=np.int64)
-    lengths[child] = calibration.model.bone_lengths / mm_per_unit
-    residuals[child] = calibration.residual / mm_per_unit
+    lengths[child] = calibration.model.bone_lengths / scale
+    residuals[child] = calibration.residual / scale
     n_frames[child] = calibration.n_frames
     detail = (f"Levenberg-Marquardt subject calibration over {len(calibration.frames)} "
               "marker frames with the X-ray ratio prior (Zhao et al. 2012, section 4)")

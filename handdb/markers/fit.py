@@ -15,7 +15,8 @@ from dataclasses import dataclass
 import numpy as np
 import pyarrow as pa
 
-from handdb.clip import METERS_PER_UNIT, ClipSpec
+from handdb.checks import as_points, check_hand, mm_per_unit
+from handdb.clip import ClipSpec
 from handdb.errors import ClipDataError, ParameterError
 from handdb.export.rotations import JointMotion
 from handdb.hand.model import (
@@ -141,13 +142,13 @@ def fit_markers(markers: np.ndarray, *, hand: str = "right", units: str = "mm",
     -------
     MarkerFit
     """
-    mm_per_unit = METERS_PER_UNIT[units] * 1000.0
-    mm = np.asarray(markers, dtype=np.float64) * mm_per_unit
-    visible = np.asarray(np.isfinite(mm).all(axis=-1), dtype=bool)
-    template = build_hand_model(hand, skeleton=skeleton)
+    scale = mm_per_unit(units)
+    template = build_hand_model(check_hand(hand), skeleton=skeleton)
+    mm = as_points(markers, template.n_joints, 3, "markers") * scale
+    visible = np.isfinite(mm).all(axis=-1)
     _check_enough_markers(template.skeleton, visible, calibrating=not bone_lengths)
     if bone_lengths:
-        model = build_hand_model(hand, {k: v * mm_per_unit for k, v in bone_lengths.items()},
+        model = build_hand_model(hand, {k: v * scale for k, v in bone_lengths.items()},
                                  skeleton=skeleton)
         calibration = None
     else:
@@ -172,8 +173,8 @@ def fit_markers(markers: np.ndarray, *, hand: str = "right", units: str = "mm",
     poses = filter_and_refine(model, mm, poses, passes=filter_passes)
     joints = forward_kinematics(model, poses)
     residual = np.where(visible, np.linalg.norm(joints - mm, axis=-1), np.nan)
-    return MarkerFit(model=model, poses=poses, joints=joints / mm_per_unit,
-                     residual=residual / mm_per_unit, calibration=calibration,
+    return MarkerFit(model=model, poses=poses, joints=joints / scale,
+                     residual=residual / scale, calibration=calibration,
                      key_frames=keys)
 
 
@@ -214,8 +215,7 @@ def fitted_bone_lengths(fit: MarkerFit, spec: ClipSpec) -> BoneLengths:
         return calibrated_bone_lengths(fit.calibration, spec.units)
     skeleton = fit.model.skeleton
     lengths = np.full(skeleton.n_joints, np.nan)
-    lengths[skeleton.bones[:, 1]] = fit.model.bone_lengths / (METERS_PER_UNIT[spec.units]
-                                                               * 1000.0)
+    lengths[skeleton.bones[:, 1]] = fit.model.bone_lengths / mm_per_unit(spec.units)
     given = [j in spec.bone_lengths for j in skeleton.joints]
     sources = tuple(None if j == skeleton.root else "given" if g else "proportions"
                     for j, g in enumerate(given))
@@ -252,9 +252,8 @@ def joint_motion(fit: MarkerFit, units: str = "mm") -> JointMotion:
     units
         The clip's length unit, the unit of the translations.
     """
-    mm_per_unit = METERS_PER_UNIT[units] * 1000.0
     rotations, translations = joint_transforms(fit.model, fit.poses)
-    translations = translations / mm_per_unit
+    translations = translations / mm_per_unit(units)
     flips = np.sum(rotations[1:] * rotations[:-1], axis=-1) < 0
     signs = np.concatenate([np.ones((1,) + flips.shape[1:]),
                             np.cumprod(np.where(flips, -1.0, 1.0), axis=0)])

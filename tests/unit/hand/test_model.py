@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from handdb.errors import SkeletonError
+from handdb.errors import ParameterError, SkeletonError
 from handdb.export.rotations import JointMotion, motion_positions
 from handdb.hand.anatomy import AXES
 from handdb.hand.model import (
@@ -160,5 +160,5 @@ def test_bad_geometry_is_refused(model):
         model.with_geometry(-model.bone_lengths)
     with pytest.raises(SkeletonError, match="not bones"):
         build_hand_model("right", {"wrist": 10.0})
-    with pytest.raises(SkeletonError, match="right' or 'left"):
+    with pytest.raises(ParameterError, match="hand must be one of left, right"):
         build_hand_model("both")

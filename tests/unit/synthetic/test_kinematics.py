@@ -3,6 +3,7 @@
 import numpy as np
 import pytest
 
+from handdb.errors import ParameterError, SkeletonError
 from handdb.hand.model import forward_kinematics
 from handdb.hand.skeletons import load_skeleton
 from handdb.synthetic.hands import make_hand, thesis_hand
@@ -113,11 +114,11 @@ def test_thesis_hand_uses_the_appendix_lengths_exactly_and_hangs_from_the_palm_f
     np.testing.assert_allclose(rest[:, 2], 0.0, atol=1e-12)  # the Maya hand is flat
 
 
-@pytest.mark.parametrize(("kwargs", "message"), [
-    ({"hand": "both"}, "hand must be"),
-    ({"hand_length_mm": 0.0}, "hand_length_mm"),
-    ({"skeleton": "nope"}, "unknown skeleton"),
+@pytest.mark.parametrize(("kwargs", "error", "message"), [
+    ({"hand": "both"}, ParameterError, "hand must be one of left, right, got 'both'"),
+    ({"hand_length_mm": 0.0}, ParameterError, "hand_length_mm"),
+    ({"skeleton": "nope"}, SkeletonError, "unknown skeleton"),
 ])
-def test_bad_arguments_are_refused(kwargs, message):
-    with pytest.raises(Exception, match=message):
+def test_bad_arguments_are_refused(kwargs, error, message):
+    with pytest.raises(error, match=message):
         make_hand(**kwargs)
