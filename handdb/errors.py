@@ -109,6 +109,15 @@ class DatabaseLockedError(StoreError):
     """Another build holds the database lock."""
 
 
+class DatabasePathError(StoreError):
+    """A database path that cannot hold a database, or a path inside it handdb will not use.
+
+    A file where the database folder belongs, a folder the build cannot write, or a
+    symbolic link inside the database (a write through it would land outside). The
+    message names the path and what to change.
+    """
+
+
 class BoneLengthError(HanddbError):
     """No bone lengths can be had for a clip."""
 

@@ -16,6 +16,7 @@ from typing import Annotated
 
 import typer
 from rich.console import Console
+from rich.markup import escape
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 from rich.table import Table
 
@@ -67,6 +68,11 @@ class ClipProgress:
         """Move the bar when a clip is done, however it ended."""
         if stage in ("commit", "unchanged", "refused", "failed"):
             self._progress.update(self._task, advance=1, description=f"{stage} {clip_id}")
+
+
+def print_error(error: Exception, label: str = "error") -> None:
+    """Print ``error`` on one logical line, so that paths in it stay whole and literal."""
+    console.print(f"[red]{label}:[/] {escape(str(error))}", soft_wrap=True)
 
 
 def run_build(inbox: str, db: str, options=None, *, workers: int = 4,
@@ -136,7 +142,7 @@ def build(
         summary = run_build(inbox, db, options, workers=workers, runner=runner,
                             dask_address=dask_address)
     except HanddbError as exc:
-        console.print(f"[red]error:[/] {exc}")
+        print_error(exc)
         raise typer.Exit(EXIT_FAILED) from None
     print_summary(summary)
     if summary.failed:
@@ -160,8 +166,11 @@ def sql(
 
     try:
         result = query(db, statement)
+    except HanddbError as exc:
+        print_error(exc)
+        raise typer.Exit(EXIT_FAILED) from None
     except duckdb.Error as exc:
-        console.print(f"[red]SQL error:[/] {exc}")
+        print_error(exc, "SQL error")
         raise typer.Exit(EXIT_FAILED) from None
     if format is OutputFormat.csv:
         writer = csv.writer(sys.stdout, lineterminator="\n")
@@ -201,7 +210,7 @@ def serve(
     try:
         orchestrator = load_orchestrator()
     except HanddbError as exc:
-        console.print(f"[red]error:[/] {exc}")
+        print_error(exc)
         raise typer.Exit(EXIT_FAILED) from None
     orchestrator.serve(inbox, db, cron=cron, interval=interval)
 
@@ -216,7 +225,7 @@ def demo(inbox: Inbox = DEFAULT_INBOX, db: Db = DEFAULT_DB) -> None:
     try:
         summary = run_build(inbox, db)
     except HanddbError as exc:
-        console.print(f"[red]error:[/] {exc}")
+        print_error(exc)
         raise typer.Exit(EXIT_FAILED) from None
     print_summary(summary)
     out.print(describe_database(db))

@@ -13,6 +13,11 @@ reader matches (``*.parquet.tmp``) and then renamed into place. A clip's tables 
 committed with its ``clips`` row last, so a clip whose ``clips`` row carries the current
 build key is complete; a build interrupted at any point re-processes exactly the clips
 it had not committed. A build holds an exclusive lock on the database while it writes.
+
+Everything the store writes or removes lies inside the database folder. The folder itself
+may be a symbolic link (the user chose where it lives), but nothing inside it may be one:
+a build refuses a database holding a link (:class:`~handdb.errors.DatabasePathError`
+naming it) before it writes anything, and no write or removal goes through one.
 """
 
 from __future__ import annotations
@@ -30,7 +35,7 @@ import pyarrow as pa
 import pyarrow.parquet as pq
 from fsspec.implementations.local import LocalFileSystem
 
-from handdb.errors import DatabaseLockedError, StoreError
+from handdb.errors import DatabaseLockedError, DatabasePathError, StoreError
 from handdb.store import tables
 
 #: Tables holding one file per clip; a clip commit replaces all of them.
@@ -45,6 +50,10 @@ LOCK_FILE = ".lock"
 _WINDOWS_LOCK_SPAN = 1 << 20
 PARQUET_SUFFIX = ".parquet"
 TMP_SUFFIX = ".tmp"
+
+#: ``os.open`` flag that refuses a symbolic link as the last part of a path (none on Windows,
+#: where the lock file is checked before it is opened).
+_NO_FOLLOW = getattr(os, "O_NOFOLLOW", 0)
 
 
 def _try_lock(fh) -> bool:
@@ -136,6 +145,109 @@ class Store:
         return [path.rsplit("/", 1)[-1].removesuffix(PARQUET_SUFFIX)
                 for path in self.table_files(table)]
 
+    def checked(self, path: str) -> str:
+        """``path`` (a path under the database root) when no part of it is a symbolic link.
+
+        Raises
+        ------
+        DatabasePathError
+            Naming the first part of ``path`` below the root that is a link.
+        """
+        if not self.is_local:
+            return path
+        current = self.root
+        for part in path.removeprefix(f"{self.root}/").split("/"):
+            current = f"{current}/{part}"
+            if os.path.islink(current):
+                raise DatabasePathError(
+                    f"{current} is a symbolic link (to {os.readlink(current)}) inside the "
+                    f"database {self.url}; handdb writes and removes files only inside the "
+                    "database, never through a link: replace the link with the folder or "
+                    "file it points to"
+                )
+        return path
+
+    def makedirs(self, *parts: str) -> str:
+        """Create the folder ``parts`` under the root (and those above it); return its path."""
+        folder = self.checked(self.path(*parts))
+        self.fs.makedirs(folder, exist_ok=True)
+        return folder
+
+    def check_links(self) -> None:
+        """Refuse a local database that holds a symbolic link anywhere inside it.
+
+        Raises
+        ------
+        DatabasePathError
+            Naming the first link found.
+        """
+        if not self.is_local:
+            return
+        for folder, subfolders, files in os.walk(self.root):
+            for name in sorted([*subfolders, *files]):
+                self.checked(f"{folder}/{name}")
+
+    def check_writable(self) -> None:
+        """Make sure a build can use the database folder, creating it when only it is missing.
+
+        Raises
+        ------
+        DatabasePathError
+            When the path is a file, its parent folder is missing or is a file, or the
+            folder cannot be written; the message names the path and what to change.
+        """
+        if not self.is_local:
+            self.fs.makedirs(self.root, exist_ok=True)
+            return
+        root, parent = self.root, os.path.dirname(self.root)
+        if os.path.exists(root) and not os.path.isdir(root):
+            raise DatabasePathError(
+                f"database path {root} is a file, not a folder: pass --db a folder (it is "
+                "created when missing), or move the file away"
+            )
+        if not os.path.isdir(parent):
+            what = "is a file" if os.path.exists(parent) else "does not exist"
+            raise DatabasePathError(
+                f"database folder {root} cannot be created: its parent {parent} {what}; "
+                "create that folder first, or pass --db a path in an existing folder"
+            )
+        try:
+            os.makedirs(root, exist_ok=True)
+        except PermissionError:
+            raise DatabasePathError(self._unwritable()) from None
+        if not os.access(root, os.W_OK | os.X_OK):
+            raise DatabasePathError(self._unwritable())
+
+    def _unwritable(self) -> str:
+        return (f"cannot write in the database folder {self.root}: make it writable "
+                "(chmod u+w), or pass --db a folder you can write")
+
+    def check_readable(self) -> None:
+        """Make sure the database exists, to query it.
+
+        Raises
+        ------
+        DatabasePathError
+            When there is nothing at the path, a file, or a folder with no table of a
+            handdb database.
+        """
+        if not self.fs.exists(self.root):
+            raise DatabasePathError(
+                f"there is no database at {self.url}: build one with 'handdb build --db "
+                f"{self.url}', or pass --db the folder of a database"
+            )
+        if not self.fs.isdir(self.root):
+            raise DatabasePathError(
+                f"database path {self.url} is a file, not a database folder: pass --db the "
+                "folder of a database"
+            )
+        if not any(self.fs.isdir(self.path(name)) for name in tables.table_names()):
+            raise DatabasePathError(
+                f"{self.url} is a folder, but not a handdb database (it has no table "
+                f"folder): build one with 'handdb build --db {self.url}', or pass --db the "
+                "folder of a database"
+            )
+
     def partition_path(self, table: str, key: str) -> str:
         """Path of the file holding partition ``key`` of ``table``."""
         return self.path(table, f"{key}{PARQUET_SUFFIX}")
@@ -147,8 +259,8 @@ class Store:
         it does not conform.
         """
         data = tables.conform(table, data)
-        self.fs.makedirs(self.path(table), exist_ok=True)
-        final = self.partition_path(table, key)
+        self.makedirs(table)
+        final = self.checked(self.partition_path(table, key))
         temp = f"{final}.{uuid.uuid4().hex}{TMP_SUFFIX}"
         with self.fs.open(temp, "wb") as fh:
             pq.write_table(data, fh, compression="zstd", write_statistics=True)
@@ -178,7 +290,7 @@ class Store:
 
     def delete(self, table: str, key: str) -> None:
         """Remove partition ``key`` of ``table`` if it exists."""
-        path = self.partition_path(table, key)
+        path = self.checked(self.partition_path(table, key))
         if self.fs.exists(path):
             self.fs.rm(path)
 
@@ -221,8 +333,8 @@ class Store:
         Only the table folders of this database are listed: temporaries are written nowhere
         else.
         """
-        leftovers = [path for table in tables.table_names()
-                     for path in self.files_in(self.path(table), TMP_SUFFIX)]
+        leftovers = [self.checked(path) for table in tables.table_names()
+                     for path in self.files_in(self.checked(self.path(table)), TMP_SUFFIX)]
         for path in leftovers:
             self.fs.rm(path)
         return len(leftovers)
@@ -234,15 +346,29 @@ class Store:
         On a local database the lock is an OS file lock, released by the kernel even when
         the build is killed. On other filesystems it is a lock file created exclusively.
 
+        The database folder is checked first (:meth:`check_writable`), and, once the lock
+        is held, everything inside it (:meth:`check_links`).
+
         Raises
         ------
         DatabaseLockedError
             When another build holds the lock.
+        DatabasePathError
+            When the database folder cannot be used, or holds a symbolic link.
         """
-        self.fs.makedirs(self.root, exist_ok=True)
-        path = self.path(LOCK_FILE)
+        self.check_writable()
+        path = self.checked(self.path(LOCK_FILE))
         if self.is_local:
-            with open(path, "a+") as fh:
+            try:
+                descriptor = os.open(path, os.O_RDWR | os.O_CREAT | _NO_FOLLOW, 0o644)
+            except PermissionError:
+                raise DatabasePathError(self._unwritable()) from None
+            except OSError as exc:
+                raise DatabasePathError(
+                    f"cannot open the lock file {path} ({exc.strerror}): remove it; no "
+                    "build is running when none holds it"
+                ) from None
+            with os.fdopen(descriptor, "r+") as fh:
                 if not _try_lock(fh):
                     fh.seek(0)
                     holder = fh.read().strip() or "another process"
@@ -255,6 +381,7 @@ class Store:
                 fh.write(f"pid {os.getpid()} on {socket.gethostname()}")
                 fh.flush()
                 try:
+                    self.check_links()
                     yield
                 finally:
                     fh.seek(0)

@@ -59,6 +59,14 @@ def connect(db: str | Store, *, database: str = ":memory:") -> duckdb.DuckDBPyCo
 
 
 def query(db: str | Store, sql: str) -> pa.Table:
-    """Run ``sql`` against the database at ``db`` and return the result as Arrow."""
-    with connect(db) as con:
+    """Run ``sql`` against the database at ``db`` and return the result as Arrow.
+
+    Raises
+    ------
+    DatabasePathError
+        When there is no database at ``db``.
+    """
+    store = db if isinstance(db, Store) else Store(str(db))
+    store.check_readable()
+    with connect(store) as con:
         return con.sql(sql).to_arrow_table()
