@@ -118,6 +118,10 @@ class DatabasePathError(StoreError):
     """
 
 
+class QueryError(StoreError):
+    """A statement given to query the database that holds no query (empty, only comments)."""
+
+
 class BoneLengthError(HanddbError):
     """No bone lengths can be had for a clip."""
 

@@ -6,6 +6,12 @@ characters); the files are read in place, lazily, in the table's contract schema
 with no file yet is an empty view with the contract's columns, so every query that names a
 table works on any database. Derived views in ``schemas/views/*.sql`` are created after the
 table views.
+
+A read-only connection (what :func:`query` and ``handdb sql`` use) is sealed with DuckDB's
+own settings once the views exist: external access is off, so no statement reads or writes
+any file (``COPY ... TO``, ``ATTACH``, ``EXPORT DATABASE``, ``read_csv``, extensions), and
+the configuration is locked, so no statement turns it back on. DuckDB's catalog lives in
+memory: a statement may create a table there, never a file.
 """
 
 from __future__ import annotations
@@ -15,11 +21,19 @@ import pyarrow as pa
 import pyarrow.dataset as ds
 import pyarrow.fs as pafs
 
+from handdb.errors import QueryError
 from handdb.paths import SCHEMAS_DIR
 from handdb.store import tables
 from handdb.store.database import Store
 
 VIEWS_DIR = SCHEMAS_DIR / "views"
+
+#: DuckDB settings that seal a read-only connection, in order (the lock comes last).
+READ_ONLY_SETTINGS: tuple[tuple[str, bool], ...] = (
+    ("python_enable_replacements", False),
+    ("enable_external_access", False),
+    ("lock_configuration", True),
+)
 
 
 def arrow_filesystem(store: Store) -> pafs.FileSystem:
@@ -38,7 +52,8 @@ def table_rows(store: Store, table: str) -> ds.Dataset | pa.Table:
                       filesystem=arrow_filesystem(store))
 
 
-def connect(db: str | Store, *, database: str = ":memory:") -> duckdb.DuckDBPyConnection:
+def connect(db: str | Store, *, database: str = ":memory:", read_only: bool = False
+            ) -> duckdb.DuckDBPyConnection:
     """Open a DuckDB connection with a view for every table of the database at ``db``.
 
     Parameters
@@ -47,6 +62,9 @@ def connect(db: str | Store, *, database: str = ":memory:") -> duckdb.DuckDBPyCo
         Database folder or fsspec URL, or a :class:`~handdb.store.database.Store`.
     database
         DuckDB's own database (in memory by default: the data stays in Parquet).
+    read_only
+        Seal the connection once the views exist (:data:`READ_ONLY_SETTINGS`): its
+        statements can read the views and nothing else, and write no file.
     """
     store = db if isinstance(db, Store) else Store(str(db))
     con = duckdb.connect(database)
@@ -55,18 +73,29 @@ def connect(db: str | Store, *, database: str = ":memory:") -> duckdb.DuckDBPyCo
         con.execute(f"CREATE OR REPLACE VIEW {name} AS SELECT * FROM _rows_{name}")
     for sql in sorted(VIEWS_DIR.glob("*.sql")):
         con.execute(sql.read_text())
+    if read_only:
+        for name, value in READ_ONLY_SETTINGS:
+            con.execute(f"SET {name} = {str(value).lower()}")
     return con
 
 
 def query(db: str | Store, sql: str) -> pa.Table:
-    """Run ``sql`` against the database at ``db`` and return the result as Arrow.
+    """Run ``sql`` on a read-only connection to the database at ``db``; return the result.
 
     Raises
     ------
     DatabasePathError
         When there is no database at ``db``.
+    QueryError
+        When ``sql`` holds no statement with a result.
+    duckdb.Error
+        When DuckDB refuses the statement (a file access among them).
     """
     store = db if isinstance(db, Store) else Store(str(db))
     store.check_readable()
-    with connect(store) as con:
-        return con.sql(sql).to_arrow_table()
+    with connect(store, read_only=True) as con:
+        relation = con.sql(sql)
+        if relation is None:
+            raise QueryError(f"the statement {sql.strip()[:80]!r} holds no query: give one "
+                             "with a result, e.g. 'SELECT clip_id, n_frames FROM clips'")
+        return relation.to_arrow_table()

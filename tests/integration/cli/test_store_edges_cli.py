@@ -42,3 +42,18 @@ def test_sql_on_a_file_is_an_error(tmp_path):
     (tmp_path / "db").write_text("a file")
     result = runner.invoke(app, ["sql", "--db", str(tmp_path / "db"), "SELECT 1"])
     _refused(result, "is a file")
+
+
+def test_sql_with_an_empty_statement_says_so(tmp_path):
+    (tmp_path / "db" / "clips").mkdir(parents=True)
+    result = runner.invoke(app, ["sql", "--db", str(tmp_path / "db"), " "])
+    _refused(result, "holds no query")
+
+
+def test_sql_cannot_write_into_the_database(tmp_path):
+    (tmp_path / "db" / "clips").mkdir(parents=True)
+    target = tmp_path / "db" / "clips" / "x.parquet"
+    result = runner.invoke(app, ["sql", "--db", str(tmp_path / "db"),
+                                 f"COPY (SELECT 1 AS a) TO '{target}' (FORMAT parquet)"])
+    _refused(result, "SQL error", "disabled")
+    assert not target.exists()

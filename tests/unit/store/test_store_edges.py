@@ -3,9 +3,10 @@ that cannot hold a database, damaged files."""
 
 import os
 
+import duckdb
 import pytest
 
-from handdb.errors import DatabasePathError
+from handdb.errors import DatabasePathError, QueryError
 from handdb.store.database import LOCK_FILE, Store
 from handdb.store.query import query
 from tests.support.store_rows import clip_row, truth_rows
@@ -128,3 +129,38 @@ def test_querying_no_database_is_refused(tmp_path, make):
     make(tmp_path / "db")
     with pytest.raises(DatabasePathError, match=r"build one with 'handdb build --db"):
         Store(str(tmp_path / "db")).check_readable()
+
+
+@pytest.fixture
+def stored(tmp_path):
+    """A database with one ``truth_3d`` partition, and a file outside it to read."""
+    store = Store(str(tmp_path / "db"))
+    store.write("truth_3d", "a", truth_rows("a", 3))
+    (tmp_path / "secret.csv").write_text("a,b\n1,2\n")
+    return store
+
+
+@pytest.mark.parametrize("statement", [
+    "COPY (SELECT * FROM truth_3d WHERE frame = 0) TO '{db}/truth_3d/a.parquet' (FORMAT parquet)",
+    "COPY truth_3d TO '{tmp}/out.csv'",
+    "EXPORT DATABASE '{db}/exported'",
+    "ATTACH '{db}/attached.duckdb' AS other",
+    "SELECT * FROM read_csv('{tmp}/secret.csv')",
+    "SELECT * FROM read_parquet('{db}/truth_3d/a.parquet')",
+    "SET enable_external_access = true",
+    "RESET lock_configuration",
+])
+def test_a_query_touches_no_file(stored, tmp_path, statement):
+    before = sorted(p.relative_to(tmp_path) for p in tmp_path.rglob("*"))
+    original = (tmp_path / "db" / "truth_3d" / "a.parquet").read_bytes()
+    with pytest.raises(duckdb.Error, match="disabled|Cannot change configuration"):
+        query(stored, statement.format(db=tmp_path / "db", tmp=tmp_path))
+    assert sorted(p.relative_to(tmp_path) for p in tmp_path.rglob("*")) == before
+    assert (tmp_path / "db" / "truth_3d" / "a.parquet").read_bytes() == original
+    assert query(stored, "SELECT count(*) AS n FROM truth_3d").to_pylist() == [{"n": 3}]
+
+
+@pytest.mark.parametrize("statement", ["", "   ", ";", "-- only a comment"])
+def test_a_statement_without_a_query_is_refused_with_a_message(stored, statement):
+    with pytest.raises(QueryError, match="holds no query: give one with a result"):
+        query(stored, statement)
