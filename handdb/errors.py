@@ -118,6 +118,14 @@ class DatabasePathError(StoreError):
     """
 
 
+class DamagedFileError(StoreError):
+    """A file of the database that is there but cannot be read (cut short, overwritten)."""
+
+
+class DamagedFileWarning(UserWarning):
+    """A damaged file of the database left out of a query; the message names the file."""
+
+
 class QueryError(StoreError):
     """A statement given to query the database that holds no query (empty, only comments)."""
 

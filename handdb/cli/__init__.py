@@ -10,6 +10,7 @@ from __future__ import annotations
 import csv
 import json
 import sys
+import warnings
 from enum import StrEnum
 from pathlib import Path
 from typing import Annotated
@@ -20,7 +21,7 @@ from rich.markup import escape
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 from rich.table import Table
 
-from handdb.errors import HanddbError
+from handdb.errors import DamagedFileWarning, HanddbError
 from handdb.paths import DEFAULT_DB, DEFAULT_INBOX
 
 app = typer.Typer(
@@ -99,6 +100,8 @@ def print_summary(summary) -> None:
         f"{len(summary.failed)} failed ({sum(summary.timings.values()):.1f} s)",
         soft_wrap=True,
     )
+    for repair in summary.repairs:
+        console.print(f"  [yellow]repaired[/] {escape(repair)}", soft_wrap=True)
     for refusal in summary.refusals:
         console.print(f"  [yellow]quarantined[/] {refusal}", soft_wrap=True)
     for clip_id, reasons in summary.flagged.items():
@@ -165,13 +168,17 @@ def sql(
     from handdb.store.query import query
 
     try:
-        result = query(db, statement)
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always", DamagedFileWarning)
+            result = query(db, statement)
     except HanddbError as exc:
         print_error(exc)
         raise typer.Exit(EXIT_FAILED) from None
     except duckdb.Error as exc:
         print_error(exc, "SQL error")
         raise typer.Exit(EXIT_FAILED) from None
+    for warning in caught:
+        console.print(f"[yellow]warning:[/] {escape(str(warning.message))}", soft_wrap=True)
     if format is OutputFormat.csv:
         writer = csv.writer(sys.stdout, lineterminator="\n")
         writer.writerow(result.column_names)

@@ -12,7 +12,11 @@ Writes are atomic per file: a file is written aside under a temporary name that 
 reader matches (``*.parquet.tmp``) and then renamed into place. A clip's tables are
 committed with its ``clips`` row last, so a clip whose ``clips`` row carries the current
 build key is complete; a build interrupted at any point re-processes exactly the clips
-it had not committed. A build holds an exclusive lock on the database while it writes.
+it had not committed. Just before its ``clips`` row, a commit records every file the clip
+needs (its tables' files, the ``clips`` file among them, and its USD) with size and
+SHA-256 in ``clip_files``; :meth:`Store.clip_damage` checks a committed clip against that
+record, and a build rebuilds from the inbox a clip whose files are missing or differ. A
+build holds an exclusive lock on the database while it writes.
 
 Everything the store writes or removes lies inside the database folder. The folder itself
 may be a symbolic link (the user chose where it lives), but nothing inside it may be one:
@@ -23,6 +27,7 @@ naming it) before it writes anything, and no write or removal goes through one.
 from __future__ import annotations
 
 import contextlib
+import hashlib
 import json
 import os
 import socket
@@ -35,13 +40,19 @@ import pyarrow as pa
 import pyarrow.parquet as pq
 from fsspec.implementations.local import LocalFileSystem
 
-from handdb.errors import DatabaseLockedError, DatabasePathError, StoreError
+from handdb.errors import DamagedFileError, DatabaseLockedError, DatabasePathError, StoreError
 from handdb.store import tables
 
 #: Tables holding one file per clip; a clip commit replaces all of them.
 CLIP_TABLES: tuple[str, ...] = tuple(
     name for name in tables.table_names() if tables.table_spec(name).partition == "clip"
 )
+
+#: The per-clip table recording every file a committed clip needs, with size and checksum.
+FILES_TABLE = "clip_files"
+
+#: What reading a damaged Parquet file raises (cut short, overwritten, not Parquet at all).
+DAMAGE_ERRORS: tuple[type[Exception], ...] = (pa.ArrowInvalid, OSError)
 
 LOCK_FILE = ".lock"
 
@@ -54,6 +65,21 @@ TMP_SUFFIX = ".tmp"
 #: ``os.open`` flag that refuses a symbolic link as the last part of a path (none on Windows,
 #: where the lock file is checked before it is opened).
 _NO_FOLLOW = getattr(os, "O_NOFOLLOW", 0)
+
+#: Bytes read at a time when a file is hashed.
+_HASH_CHUNK = 1 << 20
+
+
+def encode(data: pa.Table) -> bytes:
+    """The bytes of ``data`` as the store writes a Parquet file."""
+    sink = pa.BufferOutputStream()
+    pq.write_table(data, sink, compression="zstd", write_statistics=True)
+    return sink.getvalue().to_pybytes()
+
+
+def _sized(payload: bytes) -> tuple[int, str]:
+    """Size and SHA-256 (hex) of ``payload``."""
+    return len(payload), hashlib.sha256(payload).hexdigest()
 
 
 def _try_lock(fh) -> bool:
@@ -258,12 +284,15 @@ class Store:
         The data is checked against the table's contract first; nothing is written when
         it does not conform.
         """
-        data = tables.conform(table, data)
+        return self._write_bytes(table, key, encode(tables.conform(table, data)))
+
+    def _write_bytes(self, table: str, key: str, payload: bytes) -> str:
+        """Write ``payload`` as partition ``key`` of ``table``, aside and then renamed."""
         self.makedirs(table)
         final = self.checked(self.partition_path(table, key))
         temp = f"{final}.{uuid.uuid4().hex}{TMP_SUFFIX}"
         with self.fs.open(temp, "wb") as fh:
-            pq.write_table(data, fh, compression="zstd", write_statistics=True)
+            fh.write(payload)
         if self.is_local:
             os.replace(temp, final)
         else:
@@ -271,22 +300,54 @@ class Store:
         return final
 
     def read(self, table: str, key: str) -> pa.Table | None:
-        """Partition ``key`` of ``table``, or ``None`` when it does not exist."""
+        """Partition ``key`` of ``table``, or ``None`` when it does not exist.
+
+        Raises
+        ------
+        DamagedFileError
+            When the file is there but cannot be read as the table.
+        """
         path = self.partition_path(table, key)
         if not self.fs.exists(path):
             return None
-        with self.fs.open(path, "rb") as fh:
-            return pq.read_table(fh, schema=tables.schema(table))
+        return self._read_file(table, path)
+
+    def _read_file(self, table: str, path: str) -> pa.Table:
+        try:
+            with self.fs.open(path, "rb") as fh:
+                return pq.read_table(fh, schema=tables.schema(table))
+        except DAMAGE_ERRORS as exc:
+            raise DamagedFileError(
+                f"{self.uri(self.relative(path))} is damaged ({exc}); the next build writes "
+                "it again from the inbox"
+            ) from None
+
+    def relative(self, path: str) -> str:
+        """``path`` (on :attr:`fs`, under the root) relative to the database folder."""
+        return path.removeprefix(f"{self.root}/")
 
     def read_table(self, table: str) -> pa.Table:
-        """Every partition of ``table`` concatenated (an empty table when there is none)."""
-        parts = []
-        for path in self.table_files(table):
-            with self.fs.open(path, "rb") as fh:
-                parts.append(pq.read_table(fh, schema=tables.schema(table)))
+        """Every partition of ``table`` concatenated (an empty table when there is none).
+
+        Raises
+        ------
+        DamagedFileError
+            When one of its files cannot be read.
+        """
+        parts = [self._read_file(table, path) for path in self.table_files(table)]
         if not parts:
             return tables.empty(table)
         return pa.concat_tables(parts)
+
+    def readable_partitions(self, table: str) -> tuple[pa.Table, tuple[str, ...]]:
+        """Every partition of ``table`` that reads, concatenated; and the keys that do not."""
+        parts, damaged = [], []
+        for key in self.partition_keys(table):
+            try:
+                parts.append(self._read_file(table, self.partition_path(table, key)))
+            except DamagedFileError:
+                damaged.append(key)
+        return (pa.concat_tables(parts) if parts else tables.empty(table)), tuple(damaged)
 
     def delete(self, table: str, key: str) -> None:
         """Remove partition ``key`` of ``table`` if it exists."""
@@ -299,31 +360,82 @@ class Store:
 
         ``clip_tables`` must hold a ``clips`` row; per-clip tables it does not name are
         removed for this clip (a clip that lost its ground truth loses its ``truth_3d``).
-        The ``clips`` row is written last: it marks the clip as complete.
+        The files are recorded in ``clip_files`` (:data:`FILES_TABLE`) with the USD named
+        in the ``clips`` row, and the ``clips`` row is written last: it marks the clip as
+        complete.
         """
         if "clips" not in clip_tables:
             raise StoreError(f"commit of clip '{clip_id}' has no 'clips' row")
         unknown = sorted(set(clip_tables) - set(CLIP_TABLES))
         if unknown:
             raise StoreError(f"commit of clip '{clip_id}': {unknown} are not per-clip tables")
+        if FILES_TABLE in clip_tables:
+            raise StoreError(f"commit of clip '{clip_id}': '{FILES_TABLE}' is written by the "
+                             "commit itself")
         conformed = {name: tables.conform(name, data) for name, data in clip_tables.items()}
+        recorded: dict[str, tuple[int, str]] = {}
         for name in CLIP_TABLES:
-            if name == "clips":
+            if name in ("clips", FILES_TABLE):
                 continue
             if name in conformed:
-                self.write(name, clip_id, conformed[name])
+                payload = encode(conformed[name])
+                recorded[self.relative(self._write_bytes(name, clip_id, payload))] = _sized(payload)
             else:
                 self.delete(name, clip_id)
-        self.write("clips", clip_id, conformed["clips"])
+        clips = encode(conformed["clips"])
+        recorded[self.relative(self.partition_path("clips", clip_id))] = _sized(clips)
+        usd_path = conformed["clips"].column("usd_path")[0].as_py()
+        if usd_path is not None:
+            recorded[usd_path] = self._fingerprint(usd_path)
+        files = sorted(recorded)
+        self.write(FILES_TABLE, clip_id, tables.from_columns(FILES_TABLE, {
+            "clip_id": clip_id, "file": files,
+            "bytes": [recorded[f][0] for f in files], "sha256": [recorded[f][1] for f in files],
+        }))
+        self._write_bytes("clips", clip_id, clips)
+
+    def _fingerprint(self, relative: str) -> tuple[int, str]:
+        """Size and SHA-256 of the file at ``relative`` in the database."""
+        digest, size = hashlib.sha256(), 0
+        with self.fs.open(self.path(relative), "rb") as fh:
+            while chunk := fh.read(_HASH_CHUNK):
+                digest.update(chunk)
+                size += len(chunk)
+        return size, digest.hexdigest()
+
+    def clip_damage(self, clip_id: str) -> str | None:
+        """Why committed clip ``clip_id`` cannot be trusted, or ``None`` when it can.
+
+        Every file recorded at its commit (``clip_files``) must exist with the size and
+        checksum it had then.
+        """
+        record_path = self.relative(self.partition_path(FILES_TABLE, clip_id))
+        try:
+            record = self.read(FILES_TABLE, clip_id)
+        except DamagedFileError:
+            return f"the record of its files, {record_path}, is damaged"
+        if record is None:
+            return f"the record of its files, {record_path}, is missing"
+        rows = record.to_pydict()
+        for file, size, sha256 in zip(rows["file"], rows["bytes"], rows["sha256"], strict=True):
+            if not self.fs.isfile(self.path(file)):
+                return f"{file} is missing"
+            if self.fs.size(self.path(file)) != size:
+                return f"{file} is damaged (it has changed size since the clip was committed)"
+            if self._fingerprint(file)[1] != sha256:
+                return f"{file} is damaged (its checksum differs from the commit's)"
+        return None
 
     def clip_build_keys(self) -> dict[str, str]:
-        """``clip_id -> build_key`` of every committed clip."""
-        committed = self.read_table("clips").select(["clip_id", "build_key"]).to_pydict()
+        """``clip_id -> build_key`` of every committed clip whose ``clips`` file reads."""
+        clips = self.readable_partitions("clips")[0]
+        committed = clips.select(["clip_id", "build_key"]).to_pydict()
         return dict(zip(committed["clip_id"], committed["build_key"], strict=True))
 
     def clip_stage_keys(self) -> dict[str, dict[str, str]]:
-        """``clip_id -> {stage: key}`` of every committed clip."""
-        committed = self.read_table("clips").select(["clip_id", "stage_keys"]).to_pydict()
+        """``clip_id -> {stage: key}`` of every committed clip whose ``clips`` file reads."""
+        clips = self.readable_partitions("clips")[0]
+        committed = clips.select(["clip_id", "stage_keys"]).to_pydict()
         return {clip_id: json.loads(keys) for clip_id, keys in
                 zip(committed["clip_id"], committed["stage_keys"], strict=True)}
 

@@ -4,7 +4,10 @@ Each table's view scans an Arrow dataset of the table's Parquet files, listed wh
 connection is made (a folder listing, never a glob: a database path may hold pattern
 characters); the files are read in place, lazily, in the table's contract schema. A table
 with no file yet is an empty view with the contract's columns, so every query that names a
-table works on any database. Derived views in ``schemas/views/*.sql`` are created after the
+table works on any database. A file that is not readable Parquet (cut short, overwritten)
+is left out of its view with a :class:`~handdb.errors.DamagedFileWarning` naming it, so one
+damaged file never makes a whole table unreadable; the next build writes it again. Derived
+views in ``schemas/views/*.sql`` are created after the
 table views.
 
 A read-only connection (what :func:`query` and ``handdb sql`` use) is sealed with DuckDB's
@@ -16,15 +19,18 @@ memory: a statement may create a table there, never a file.
 
 from __future__ import annotations
 
+import warnings
+
 import duckdb
 import pyarrow as pa
 import pyarrow.dataset as ds
 import pyarrow.fs as pafs
+import pyarrow.parquet as pq
 
-from handdb.errors import QueryError
+from handdb.errors import DamagedFileWarning, QueryError
 from handdb.paths import SCHEMAS_DIR
 from handdb.store import tables
-from handdb.store.database import Store
+from handdb.store.database import DAMAGE_ERRORS, Store
 
 VIEWS_DIR = SCHEMAS_DIR / "views"
 
@@ -44,12 +50,29 @@ def arrow_filesystem(store: Store) -> pafs.FileSystem:
 
 
 def table_rows(store: Store, table: str) -> ds.Dataset | pa.Table:
-    """The committed rows of ``table``: a dataset over its files, or an empty table."""
-    files = store.table_files(table)
+    """The committed rows of ``table``: a dataset over its readable files, or an empty table.
+
+    A file whose Parquet footer does not read is left out, with a
+    :class:`~handdb.errors.DamagedFileWarning` naming it.
+    """
+    filesystem = arrow_filesystem(store)
+    files = [path for path in store.table_files(table) if _readable(store, path, filesystem)]
     if not files:
         return tables.empty(table)
     return ds.dataset(files, schema=tables.schema(table), format="parquet",
-                      filesystem=arrow_filesystem(store))
+                      filesystem=filesystem)
+
+
+def _readable(store: Store, path: str, filesystem: pafs.FileSystem) -> bool:
+    """Whether the Parquet file at ``path`` opens; warn, naming it, when it does not."""
+    try:
+        pq.read_metadata(path, filesystem=filesystem)
+    except DAMAGE_ERRORS as exc:
+        warnings.warn(DamagedFileWarning(
+            f"left out {store.uri(store.relative(path))}: it is damaged ({exc}); build the "
+            "database again to write it from the inbox"), stacklevel=2)
+        return False
+    return True
 
 
 def connect(db: str | Store, *, database: str = ":memory:", read_only: bool = False

@@ -1,13 +1,15 @@
 """The store's edges: paths that look like patterns, links that leave the database, paths
 that cannot hold a database, damaged files."""
 
+import hashlib
 import os
+import re
 
 import duckdb
 import pytest
 
-from handdb.errors import DatabasePathError, QueryError
-from handdb.store.database import LOCK_FILE, Store
+from handdb.errors import DamagedFileError, DamagedFileWarning, DatabasePathError, QueryError
+from handdb.store.database import FILES_TABLE, LOCK_FILE, Store
 from handdb.store.query import query
 from tests.support.store_rows import clip_row, truth_rows
 
@@ -164,3 +166,59 @@ def test_a_query_touches_no_file(stored, tmp_path, statement):
 def test_a_statement_without_a_query_is_refused_with_a_message(stored, statement):
     with pytest.raises(QueryError, match="holds no query: give one with a result"):
         query(stored, statement)
+
+
+@pytest.fixture
+def committed(tmp_path):
+    """Two committed clips, ``a`` and ``b``, with their ``truth_3d`` rows."""
+    store = Store(str(tmp_path / "db"))
+    for clip_id, n_frames in (("a", 3), ("b", 5)):
+        store.commit_clip(clip_id, {"clips": clip_row(clip_id),
+                                    "truth_3d": truth_rows(clip_id, n_frames)})
+    return store
+
+
+def test_a_commit_records_every_file_with_its_size_and_checksum(committed, tmp_path):
+    record = committed.read(FILES_TABLE, "a").to_pylist()
+    assert [r["file"] for r in record] == ["clips/a.parquet", "truth_3d/a.parquet"]
+    for row in record:
+        data = (tmp_path / "db" / row["file"]).read_bytes()
+        assert row["bytes"] == len(data)
+        assert row["sha256"] == hashlib.sha256(data).hexdigest()
+    assert committed.clip_damage("a") is None and committed.clip_damage("b") is None
+
+
+def _flip_a_byte(path):
+    data = bytearray(path.read_bytes())
+    data[len(data) // 2] ^= 0xFF
+    path.write_bytes(bytes(data))
+
+
+@pytest.mark.parametrize(("damage", "said"), [
+    (lambda p: p.unlink(), r"truth_3d/a\.parquet is missing"),
+    (lambda p: p.write_bytes(p.read_bytes()[:-20]),
+     r"truth_3d/a\.parquet is damaged \(it has changed size.*\)"),
+    (_flip_a_byte, r"truth_3d/a\.parquet is damaged \(its checksum differs.*\)"),
+])
+def test_a_missing_or_damaged_file_is_noticed(committed, tmp_path, damage, said):
+    damage(tmp_path / "db" / "truth_3d" / "a.parquet")
+    assert re.fullmatch(said, committed.clip_damage("a"))
+    assert committed.clip_damage("b") is None
+
+
+def test_a_clip_without_a_record_of_its_files_is_not_trusted(committed, tmp_path):
+    (tmp_path / "db" / FILES_TABLE / "a.parquet").unlink()
+    assert committed.clip_damage("a") == "the record of its files, clip_files/a.parquet, is missing"
+
+
+def test_one_damaged_file_leaves_the_rest_of_its_table_readable(committed, tmp_path):
+    damaged = tmp_path / "db" / "truth_3d" / "a.parquet"
+    damaged.write_bytes(damaged.read_bytes()[:-20])
+    with pytest.warns(DamagedFileWarning, match=r"left out .*truth_3d/a\.parquet: it is damaged"):
+        result = query(committed, "SELECT clip_id, count(*) AS n FROM truth_3d GROUP BY clip_id")
+    assert result.to_pylist() == [{"clip_id": "b", "n": 5}]
+    with pytest.raises(DamagedFileError, match=r"truth_3d/a\.parquet is damaged"):
+        committed.read_table("truth_3d")
+    keys = committed.clip_build_keys()
+    (tmp_path / "db" / "clips" / "b.parquet").write_bytes(b"not parquet")
+    assert keys == {"a": "k1", "b": "k1"} and committed.clip_build_keys() == {"a": "k1"}
