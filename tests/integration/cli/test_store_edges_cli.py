@@ -4,6 +4,8 @@ write, statements that say nothing."""
 from typer.testing import CliRunner
 
 from handdb.cli import EXIT_FAILED, app
+from handdb.store.database import Store
+from tests.support.store_rows import truth_rows
 
 runner = CliRunner()
 
@@ -57,3 +59,15 @@ def test_sql_cannot_write_into_the_database(tmp_path):
                                  f"COPY (SELECT 1 AS a) TO '{target}' (FORMAT parquet)"])
     _refused(result, "SQL error", "disabled")
     assert not target.exists()
+
+
+def test_sql_leaves_a_damaged_file_out_and_names_it(tmp_path):
+    store = Store(str(tmp_path / "db"))
+    store.write("truth_3d", "a", truth_rows("a", 3))
+    store.write("truth_3d", "b", truth_rows("b", 5))
+    (tmp_path / "db" / "truth_3d" / "a.parquet").write_bytes(b"cut sho")
+    result = runner.invoke(app, ["sql", "--db", str(tmp_path / "db"), "-f", "csv",
+                                 "SELECT count(*) AS n FROM truth_3d"])
+    assert result.exit_code == 0, result.output
+    assert result.stdout.splitlines() == ["n", "5"]
+    assert "warning:" in result.stderr and "truth_3d/a.parquet: it is damaged" in result.stderr
