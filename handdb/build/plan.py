@@ -6,7 +6,8 @@ the one the clip was committed under. A committed clip the build would keep is c
 against the record of its files (:meth:`~handdb.store.database.Store.clip_damage`): one
 whose files are missing or damaged is rebuilt from the inbox, and the plan says why
 (:attr:`BuildPlan.repairs`), as it does for a stored X-ray, ratio or quarantine file that
-no longer reads. It writes nothing: a build whose plan has nothing to
+no longer reads. An inbox clip whose id differs only in case from a stored clip's is
+refused. It writes nothing: a build whose plan has nothing to
 do finishes without running a single stage, and without starting Prefect.
 """
 
@@ -19,7 +20,7 @@ import pyarrow as pa
 
 from handdb.build.keys import STAGES, first_changed_stage, stage_keys, table_hash
 from handdb.build.options import BuildOptions
-from handdb.errors import DamagedFileError
+from handdb.errors import DamagedFileError, InputError
 from handdb.ingest import clip_content_hash, discover
 from handdb.ingest.inbox import ClipEntry
 from handdb.ingest.registry import MARKERS_KIND, get_format
@@ -195,7 +196,12 @@ def plan_build(inbox: str | Path, db: str, options: BuildOptions) -> BuildPlan:
     committed = set(store.partition_keys("clips"))
     clips, repairs = [], _damaged_files(store, [("quarantine", "quarantine")])
     repairs += xray.repairs
+    refusals = [Refusal.from_error(e) for e in scan.refused]
     for entry in scan.clips:
+        twin = _stored_twin(entry, committed, store)
+        if twin is not None:
+            refusals.append(Refusal.from_error(twin))
+            continue
         digest = clip_content_hash(entry)
         markers = get_format(entry.track_format).kind == MARKERS_KIND
         keys = stage_keys(digest, options, ratios_hash, marker_clip=markers)
@@ -207,8 +213,25 @@ def plan_build(inbox: str | Path, db: str, options: BuildOptions) -> BuildPlan:
         clips.append(PlannedClip(entry=entry, content_hash=digest, keys=keys, start=start,
                                  markers=markers))
     return BuildPlan(inbox=str(inbox), db=db, options=options, clips=tuple(clips), xray=xray,
-                     refusals=tuple(Refusal.from_error(e) for e in scan.refused),
-                     repairs=tuple(repairs))
+                     refusals=tuple(refusals), repairs=tuple(repairs))
+
+
+def _stored_twin(entry: ClipEntry, committed: set[str], store: Store) -> InputError | None:
+    """The refusal of an inbox clip whose id differs only in case from a stored clip's.
+
+    The two would share their files on a file system that ignores case (macOS, Windows),
+    and a database folder copied to one.
+    """
+    folded = entry.clip_id.casefold()
+    twins = sorted(c for c in committed if c.casefold() == folded and c != entry.clip_id)
+    if not twins:
+        return None
+    return InputError(
+        entry.sidecar,
+        f"clip id {entry.clip_id!r} differs only in case from the clip {twins[0]!r} stored in "
+        f"the database {store.url}; they would share their files where case is ignored: "
+        f"name the clip {twins[0]!r} again, or give it an id of its own",
+        field="clip_id", clip_id=entry.clip_id)
 
 
 def _clip_damage(store: Store, clip_id: str, committed: set[str],
