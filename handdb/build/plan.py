@@ -242,7 +242,7 @@ def _clip_damage(store: Store, clip_id: str, committed: set[str],
     ``clips`` file does not read is damaged, and one the build would keep, in whole or in
     part, is checked against the record of its files.
     """
-    if clip_id not in committed or start == STAGES[0] and clip_id in stored:
+    if clip_id not in committed or (start == STAGES[0] and clip_id in stored):
         return None
     if clip_id not in stored:
         return f"clips/{clip_id}.parquet is damaged"

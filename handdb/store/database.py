@@ -339,15 +339,13 @@ class Store:
             return tables.empty(table)
         return pa.concat_tables(parts)
 
-    def readable_partitions(self, table: str) -> tuple[pa.Table, tuple[str, ...]]:
-        """Every partition of ``table`` that reads, concatenated; and the keys that do not."""
-        parts, damaged = [], []
-        for key in self.partition_keys(table):
-            try:
-                parts.append(self._read_file(table, self.partition_path(table, key)))
-            except DamagedFileError:
-                damaged.append(key)
-        return (pa.concat_tables(parts) if parts else tables.empty(table)), tuple(damaged)
+    def readable_rows(self, table: str) -> pa.Table:
+        """Every partition of ``table`` that reads, concatenated; damaged files left out."""
+        parts = []
+        for path in self.table_files(table):
+            with contextlib.suppress(DamagedFileError):
+                parts.append(self._read_file(table, path))
+        return pa.concat_tables(parts) if parts else tables.empty(table)
 
     def delete(self, table: str, key: str) -> None:
         """Remove partition ``key`` of ``table`` if it exists."""
@@ -428,14 +426,12 @@ class Store:
 
     def clip_build_keys(self) -> dict[str, str]:
         """``clip_id -> build_key`` of every committed clip whose ``clips`` file reads."""
-        clips = self.readable_partitions("clips")[0]
-        committed = clips.select(["clip_id", "build_key"]).to_pydict()
+        committed = self.readable_rows("clips").select(["clip_id", "build_key"]).to_pydict()
         return dict(zip(committed["clip_id"], committed["build_key"], strict=True))
 
     def clip_stage_keys(self) -> dict[str, dict[str, str]]:
         """``clip_id -> {stage: key}`` of every committed clip whose ``clips`` file reads."""
-        clips = self.readable_partitions("clips")[0]
-        committed = clips.select(["clip_id", "stage_keys"]).to_pydict()
+        committed = self.readable_rows("clips").select(["clip_id", "stage_keys"]).to_pydict()
         return {clip_id: json.loads(keys) for clip_id, keys in
                 zip(committed["clip_id"], committed["stage_keys"], strict=True)}
 

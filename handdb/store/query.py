@@ -7,8 +7,7 @@ with no file yet is an empty view with the contract's columns, so every query th
 table works on any database. A file that is not readable Parquet (cut short, overwritten)
 is left out of its view with a :class:`~handdb.errors.DamagedFileWarning` naming it, so one
 damaged file never makes a whole table unreadable; the next build writes it again. Derived
-views in ``schemas/views/*.sql`` are created after the
-table views.
+views in ``schemas/views/*.sql`` are created after the table views.
 
 A read-only connection (what :func:`query` and ``handdb sql`` use) is sealed with DuckDB's
 own settings once the views exist: external access is off, so no statement reads or writes
