@@ -110,6 +110,8 @@ def build(inbox: str, db: str, gap_fill: str | None = None, lift: str | None = N
         if run.summary.removed_temporaries:
             logger.warning("removed %d half-written files left by an interrupted build",
                            run.summary.removed_temporaries)
+        for repair in run.summary.repairs:
+            logger.warning("repaired %s", repair)
         context, todo = run.context, run.todo
         for start in range(0, len(todo), max(1, window)):
             items = todo[start:start + max(1, window)]

@@ -8,7 +8,6 @@ only when it runs.
 
 from __future__ import annotations
 
-import contextlib
 from collections.abc import Sequence
 from typing import Any
 
@@ -47,15 +46,15 @@ class PrefectOrchestrator:
               workers: int = 4, address: str | None = None) -> BuildSummary:
         """Run the build flow on ``runner``.
 
-        Dask runs tasks in worker processes, which report to this process's Prefect API
-        (:func:`~handdb_flows.settings.shared_api`).
+        The Prefect API is this process's (:func:`~handdb_flows.settings.shared_api`):
+        Dask's worker processes report to it, and a temporary server started for it ends
+        with this process, even when the build is killed.
         """
         from handdb_flows.build import WINDOW_PER_WORKER, build
         from handdb_flows.settings import quick_flows, shared_api
 
         flow_ = build.with_options(task_runner=task_runner(runner, workers, address))
-        api = shared_api() if runner == "dask" else contextlib.nullcontext()
-        with quick_flows(), api:
+        with quick_flows(), shared_api():
             return flow_(inbox=inbox, db=db, gap_fill=options.gap_fill, lift=options.lift,
                          export_usd=options.export_usd, compare=list(options.compare),
                          window=workers * WINDOW_PER_WORKER)

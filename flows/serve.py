@@ -2,7 +2,8 @@
 
 Prefect cannot schedule on its temporary in-process server, so when no ``PREFECT_API_URL``
 is set, :func:`serve_build` starts a local Prefect server (SQLite, loopback) in a child
-process, waits until it answers, serves the deployment against it, and stops it on exit.
+process, waits until it answers, serves the deployment against it, and stops it on exit;
+a reaper (:mod:`handdb_flows.reaper`) stops it when this process is killed.
 """
 
 from __future__ import annotations
@@ -21,6 +22,7 @@ from pathlib import Path
 
 from fsspec.core import url_to_fs
 from fsspec.implementations.local import LocalFileSystem
+from handdb_flows.reaper import stop_with_this_process
 
 #: Seconds to wait for a local Prefect server to answer its health check.
 SERVER_STARTUP_TIMEOUT_S = 120.0
@@ -86,6 +88,7 @@ def prefect_api() -> Iterator[str]:
          "--port", str(port)],
         env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
     )
+    stop_with_this_process(process.pid)
     try:
         _wait_healthy(api_url, process, SERVER_STARTUP_TIMEOUT_S)
         os.environ["PREFECT_API_URL"] = api_url

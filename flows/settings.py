@@ -3,8 +3,11 @@
 from __future__ import annotations
 
 import contextlib
+import subprocess
 from collections.abc import Iterator
+from functools import cache
 
+from handdb_flows.reaper import stop_with_this_process
 from prefect.settings import (
     PREFECT_API_URL,
     PREFECT_FLOWS_HEARTBEAT_FREQUENCY,
@@ -29,6 +32,10 @@ def shared_api() -> Iterator[str]:
     Here the temporary server is started once, in this process, and its loopback URL goes
     into the settings that task runners send with every task. Workers on other machines
     cannot reach a loopback URL: for those, set ``PREFECT_API_URL`` to a real server.
+
+    The temporary server ends with this process, even when this process is killed
+    (:func:`~handdb_flows.reaper.stop_with_this_process`); Prefect stops it at a normal
+    exit.
     """
     configured = PREFECT_API_URL.value()
     if configured:
@@ -38,5 +45,12 @@ def shared_api() -> Iterator[str]:
 
     server = SubprocessASGIServer()
     server.start()
+    _reaped(server.server_process.pid)
     with temporary_settings({PREFECT_API_URL: server.api_url}):
         yield server.api_url
+
+
+@cache
+def _reaped(pid: int) -> subprocess.Popen:
+    """The reaper of process ``pid``, started once however often the server is reused."""
+    return stop_with_this_process(pid)

@@ -118,6 +118,27 @@ class DatabaseLockedError(StoreError):
     """Another build holds the database lock."""
 
 
+class DatabasePathError(StoreError):
+    """A database path that cannot hold a database, or a path inside it handdb will not use.
+
+    A file where the database folder belongs, a folder the build cannot write, or a
+    symbolic link inside the database (a write through it would land outside). The
+    message names the path and what to change.
+    """
+
+
+class DamagedFileError(StoreError):
+    """A file of the database that is there but cannot be read (cut short, overwritten)."""
+
+
+class DamagedFileWarning(UserWarning):
+    """A damaged file of the database left out of a query; the message names the file."""
+
+
+class QueryError(StoreError):
+    """A statement given to query the database that holds no query (empty, only comments)."""
+
+
 class BoneLengthError(HanddbError):
     """No bone lengths can be had for a clip."""
 

@@ -2,7 +2,12 @@
 
 :func:`plan_build` scans the inbox, reads its X-ray tables (the joint ratios every clip's
 bone lengths depend on), hashes each clip's files once and compares every stage key with
-the one the clip was committed under. It writes nothing: a build whose plan has nothing to
+the one the clip was committed under. A committed clip the build would keep is checked
+against the record of its files (:meth:`~handdb.store.database.Store.clip_damage`): one
+whose files are missing or damaged is rebuilt from the inbox, and the plan says why
+(:attr:`BuildPlan.repairs`), as it does for a stored X-ray, ratio or quarantine file that
+no longer reads. An inbox clip whose id differs only in case from a stored clip's is
+refused. It writes nothing: a build whose plan has nothing to
 do finishes without running a single stage, and without starting Prefect.
 """
 
@@ -13,8 +18,9 @@ from pathlib import Path
 
 import pyarrow as pa
 
-from handdb.build.keys import first_changed_stage, stage_keys, table_hash
+from handdb.build.keys import STAGES, first_changed_stage, stage_keys, table_hash
 from handdb.build.options import BuildOptions
+from handdb.errors import DamagedFileError, InputError
 from handdb.ingest import clip_content_hash, discover
 from handdb.ingest.inbox import ClipEntry
 from handdb.ingest.registry import MARKERS_KIND, get_format
@@ -69,12 +75,15 @@ class XrayInputs:
         Whether ``ratios`` differs from the stored table.
     refusals
         Refused rows and files. A file refused whole keeps the rows stored for it.
+    repairs
+        Stored files that no longer read, each written again from the inbox.
     """
 
     measurements: dict[str, pa.Table]
     ratios: pa.Table
     ratios_changed: bool
     refusals: tuple[Refusal, ...]
+    repairs: tuple[str, ...] = ()
 
 
 @dataclass(frozen=True)
@@ -87,6 +96,7 @@ class BuildPlan:
     clips: tuple[PlannedClip, ...]
     xray: XrayInputs
     refusals: tuple[Refusal, ...] = field(default=())
+    repairs: tuple[str, ...] = field(default=())
 
     @property
     def todo(self) -> tuple[PlannedClip, ...]:
@@ -100,10 +110,11 @@ class BuildPlan:
 
     def quarantine(self, store: Store, clip_refusals: list[Refusal]) -> pa.Table | None:
         """The ``quarantine`` table after the build, or ``None`` when it does not change."""
-        previous = store.read_table("quarantine")
+        damaged = _damaged(store, "quarantine", "quarantine") is not None
+        previous = tables.empty("quarantine") if damaged else store.read_table("quarantine")
         refused = quarantine_table([*self.refusals, *self.xray.refusals, *clip_refusals],
                                    self.inbox, previous)
-        return None if refused.equals(previous) else refused
+        return None if refused.equals(previous) and not damaged else refused
 
     @property
     def nothing_to_do(self) -> bool:
@@ -115,6 +126,28 @@ class BuildPlan:
         return not self.todo and not self.xray.measurements and not self.xray.ratios_changed
 
 
+def _readable(store: Store, table: str, key: str) -> pa.Table | None:
+    """Partition ``key`` of ``table``, or ``None`` when it is missing or damaged."""
+    try:
+        return store.read(table, key)
+    except DamagedFileError:
+        return None
+
+
+def _damaged(store: Store, table: str, key: str) -> str | None:
+    """The repair of partition ``key`` of ``table`` when it is there but does not read."""
+    try:
+        store.read(table, key)
+    except DamagedFileError as exc:
+        return str(exc)
+    return None
+
+
+def _damaged_files(store: Store, partitions: list[tuple[str, str]]) -> list[str]:
+    """What is wrong with each of the ``(table, key)`` partitions that is there but damaged."""
+    return [damage for table, key in partitions if (damage := _damaged(store, table, key))]
+
+
 def read_xray_inputs(paths: list[Path], store: Store) -> XrayInputs:
     """Read the inbox's X-ray tables; work out the joint ratios they give with the stored ones.
 
@@ -122,8 +155,10 @@ def read_xray_inputs(paths: list[Path], store: Store) -> XrayInputs:
     file refused whole (not a table of measurements at all) leaves its stored partition as
     it was.
     """
-    partitions = {key: store.read("xray_measurements", key)
-                  for key in store.partition_keys("xray_measurements")}
+    keys = store.partition_keys("xray_measurements")
+    repairs = _damaged_files(store, [*(("xray_measurements", key) for key in keys),
+                                     ("joint_ratios", "joint_ratios")])
+    partitions = {key: _readable(store, "xray_measurements", key) for key in keys}
     refusals: list[Refusal] = []
     changed: dict[str, pa.Table] = {}
     for path in sorted(paths):
@@ -139,10 +174,10 @@ def read_xray_inputs(paths: list[Path], store: Store) -> XrayInputs:
     present = [partitions[key] for key in sorted(partitions) if partitions[key] is not None]
     every = pa.concat_tables(present) if present else tables.empty("xray_measurements")
     ratios = tables.conform("joint_ratios", joint_ratios(every))
-    previous = store.read("joint_ratios", "joint_ratios")
+    previous = _readable(store, "joint_ratios", "joint_ratios")
     return XrayInputs(measurements=changed, ratios=ratios,
                       ratios_changed=previous is None or not previous.equals(ratios),
-                      refusals=tuple(refusals))
+                      refusals=tuple(refusals), repairs=tuple(repairs))
 
 
 def plan_build(inbox: str | Path, db: str, options: BuildOptions) -> BuildPlan:
@@ -158,13 +193,57 @@ def plan_build(inbox: str | Path, db: str, options: BuildOptions) -> BuildPlan:
     xray = read_xray_inputs(list(scan.others.get("xray", ())), store)
     ratios_hash = table_hash(xray.ratios)
     stored = store.clip_stage_keys()
-    clips = []
+    committed = set(store.partition_keys("clips"))
+    clips, repairs = [], _damaged_files(store, [("quarantine", "quarantine")])
+    repairs += xray.repairs
+    refusals = [Refusal.from_error(e) for e in scan.refused]
     for entry in scan.clips:
+        twin = _stored_twin(entry, committed, store)
+        if twin is not None:
+            refusals.append(Refusal.from_error(twin))
+            continue
         digest = clip_content_hash(entry)
         markers = get_format(entry.track_format).kind == MARKERS_KIND
         keys = stage_keys(digest, options, ratios_hash, marker_clip=markers)
-        clips.append(PlannedClip(entry=entry, content_hash=digest, keys=keys,
-                                 start=first_changed_stage(keys, stored.get(entry.clip_id)),
+        start = first_changed_stage(keys, stored.get(entry.clip_id))
+        damage = _clip_damage(store, entry.clip_id, committed, stored, start)
+        if damage is not None:
+            repairs.append(f"clip {entry.clip_id}: {damage}; rebuilt from the inbox")
+            start = STAGES[0]
+        clips.append(PlannedClip(entry=entry, content_hash=digest, keys=keys, start=start,
                                  markers=markers))
     return BuildPlan(inbox=str(inbox), db=db, options=options, clips=tuple(clips), xray=xray,
-                     refusals=tuple(Refusal.from_error(e) for e in scan.refused))
+                     refusals=tuple(refusals), repairs=tuple(repairs))
+
+
+def _stored_twin(entry: ClipEntry, committed: set[str], store: Store) -> InputError | None:
+    """The refusal of an inbox clip whose id differs only in case from a stored clip's.
+
+    The two would share their files on a file system that ignores case (macOS, Windows),
+    and a database folder copied to one.
+    """
+    folded = entry.clip_id.casefold()
+    twins = sorted(c for c in committed if c.casefold() == folded and c != entry.clip_id)
+    if not twins:
+        return None
+    return InputError(
+        entry.sidecar,
+        f"clip id {entry.clip_id!r} differs only in case from the clip {twins[0]!r} stored in "
+        f"the database {store.url}; they would share their files where case is ignored: "
+        f"name the clip {twins[0]!r} again, or give it an id of its own",
+        field="clip_id", clip_id=entry.clip_id)
+
+
+def _clip_damage(store: Store, clip_id: str, committed: set[str],
+                 stored: dict[str, dict[str, str]], start: str | None) -> str | None:
+    """Why the committed clip ``clip_id`` must be rebuilt whole, or ``None``.
+
+    A clip rebuilt whole anyway (``start`` is the first stage) is not checked; one whose
+    ``clips`` file does not read is damaged, and one the build would keep, in whole or in
+    part, is checked against the record of its files.
+    """
+    if clip_id not in committed or (start == STAGES[0] and clip_id in stored):
+        return None
+    if clip_id not in stored:
+        return f"clips/{clip_id}.parquet is damaged"
+    return store.clip_damage(clip_id)

@@ -61,6 +61,7 @@ class BuildSummary:
     flagged: dict[str, tuple[str, ...]] = field(default_factory=dict)
     timings: dict[str, float] = field(default_factory=dict)
     removed_temporaries: int = 0
+    repairs: tuple[str, ...] = ()
 
     @property
     def ok(self) -> bool:
@@ -99,7 +100,7 @@ class Build:
             store.write("joint_ratios", "joint_ratios", plan.xray.ratios)
         summary = BuildSummary(run_id=run_id, inbox=inbox, db=db, n_clips=len(plan.clips),
                                unchanged=[c.clip_id for c in plan.unchanged],
-                               removed_temporaries=removed)
+                               removed_temporaries=removed, repairs=plan.repairs)
         summary.refusals.extend([*plan.refusals, *plan.xray.refusals])
         summary.timings["scan"] = time.perf_counter() - clock
         progress.expect(len(plan.clips))
@@ -213,6 +214,9 @@ def summary_markdown(summary: BuildSummary) -> str:
         f"- refused inputs (quarantine): {len(summary.refusals)}",
         f"- flagged as implausible: {len(summary.flagged)}",
     ]
+    if summary.repairs:
+        lines += ["", "Damaged or missing in the database, written again:", ""]
+        lines += [f"- {repair}" for repair in summary.repairs]
     if summary.refusals:
         lines += ["", "| file | line | field | reason |", "|---|---|---|---|"]
         lines += [f"| {r.file} | {r.line or ''} | {r.field or ''} | {r.reason} |"

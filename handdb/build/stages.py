@@ -228,11 +228,12 @@ def _put(store: Store, local: Path, *parts: str) -> str:
     copy. A file cut short by a killed build belongs to an uncommitted clip, which the
     next build writes again.
     """
-    store.fs.makedirs(store.path(*parts[:-1]), exist_ok=True)
+    store.makedirs(*parts[:-1])
+    target = store.checked(store.path(*parts))
     if store.is_local:
-        shutil.move(local, store.path(*parts))
+        shutil.move(local, target)
     else:
-        store.fs.put_file(str(local), store.path(*parts))
+        store.fs.put_file(str(local), target)
     return "/".join(parts)
 
 

@@ -11,16 +11,18 @@ import csv
 import importlib
 import json
 import sys
+import warnings
 from enum import StrEnum
 from pathlib import Path
 from typing import Annotated, Any
 
 import typer
 from rich.console import Console
+from rich.markup import escape
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 from rich.table import Table
 
-from handdb.errors import HanddbError
+from handdb.errors import DamagedFileWarning, HanddbError
 from handdb.paths import DEFAULT_DB, DEFAULT_INBOX
 
 #: Sub-commands whose modules are imported only when they run, so that ``handdb --help``
@@ -133,6 +135,11 @@ class ClipProgress:
             self._progress.update(self._task, advance=1, description=f"{stage} {clip_id}")
 
 
+def print_error(error: Exception, label: str = "error") -> None:
+    """Print ``error`` on one logical line, so that paths in it stay whole and literal."""
+    console.print(f"[red]{label}:[/] {escape(str(error))}", soft_wrap=True)
+
+
 def run_build(inbox: str, db: str, options=None, *, workers: int = 4,
               runner: str = "thread", dask_address: str | None = None, quiet: bool = False):
     """Run the build (:func:`handdb.build.run_build`) with a progress bar; return its summary."""
@@ -157,6 +164,8 @@ def print_summary(summary) -> None:
         f"{len(summary.failed)} failed ({sum(summary.timings.values()):.1f} s)",
         soft_wrap=True,
     )
+    for repair in summary.repairs:
+        console.print(f"  [yellow]repaired[/] {escape(repair)}", soft_wrap=True)
     for refusal in summary.refusals:
         console.print(f"  [yellow]quarantined[/] {refusal}", soft_wrap=True)
     for clip_id, reasons in summary.flagged.items():
@@ -200,7 +209,7 @@ def build(
         summary = run_build(inbox, db, options, workers=workers, runner=runner,
                             dask_address=dask_address)
     except HanddbError as exc:
-        console.print(f"[red]error:[/] {exc}")
+        print_error(exc)
         raise typer.Exit(EXIT_FAILED) from None
     print_summary(summary)
     if summary.failed:
@@ -223,10 +232,17 @@ def sql(
     from handdb.store.query import query
 
     try:
-        result = query(db, statement)
-    except duckdb.Error as exc:
-        console.print(f"[red]SQL error:[/] {exc}")
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always", DamagedFileWarning)
+            result = query(db, statement)
+    except HanddbError as exc:
+        print_error(exc)
         raise typer.Exit(EXIT_FAILED) from None
+    except duckdb.Error as exc:
+        print_error(exc, "SQL error")
+        raise typer.Exit(EXIT_FAILED) from None
+    for warning in caught:
+        console.print(f"[yellow]warning:[/] {escape(str(warning.message))}", soft_wrap=True)
     if format is OutputFormat.csv:
         writer = csv.writer(sys.stdout, lineterminator="\n")
         writer.writerow(result.column_names)
@@ -265,7 +281,7 @@ def serve(
     try:
         orchestrator = load_orchestrator()
     except HanddbError as exc:
-        console.print(f"[red]error:[/] {exc}")
+        print_error(exc)
         raise typer.Exit(EXIT_FAILED) from None
     orchestrator.serve(inbox, db, cron=cron, interval=interval)
 
@@ -280,7 +296,7 @@ def demo(inbox: Inbox = DEFAULT_INBOX, db: Db = DEFAULT_DB) -> None:
     try:
         summary = run_build(inbox, db)
     except HanddbError as exc:
-        console.print(f"[red]error:[/] {exc}")
+        print_error(exc)
         raise typer.Exit(EXIT_FAILED) from None
     print_summary(summary)
     out.print(describe_database(db))

@@ -150,8 +150,8 @@ def store_evaluation(
     store.write(EVAL_TABLE, clip.clip_id, evaluation.table)
     charted = [m for m in methods if METHODS[m].family == THESIS]
     charted += [DEFAULT_METHOD] if DEFAULT_METHOD in methods else []
-    path = chart_path(store, clip.clip_id)
-    store.fs.makedirs(store.path(REPORTS, clip.clip_id), exist_ok=True)
+    store.makedirs(REPORTS, clip.clip_id)
+    path = store.checked(chart_path(store, clip.clip_id))
     with store.fs.open(path, "wb") as fh:
         plot_masks(evaluation, clip.skeleton, fh, methods=charted or list(methods),
                    title=f"{clip.clip_id}: gap-filling error per frame")

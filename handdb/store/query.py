@@ -1,28 +1,81 @@
 """DuckDB over the database: one view per table, named like the table.
 
-Views read the Parquet files in place (``read_parquet`` over ``<db>/<table>/*.parquet``);
-a table with no file yet is an empty view with the contract's columns, so every query
-that names a table works on any database. Derived views in ``schemas/views/*.sql`` are
-created after the table views.
+Each table's view scans an Arrow dataset of the table's Parquet files, listed when the
+connection is made (a folder listing, never a glob: a database path may hold pattern
+characters); the files are read in place, lazily, in the table's contract schema. A table
+with no file yet is an empty view with the contract's columns, so every query that names a
+table works on any database. A file that is not readable Parquet (cut short, overwritten)
+is left out of its view with a :class:`~handdb.errors.DamagedFileWarning` naming it, so one
+damaged file never makes a whole table unreadable; the next build writes it again. Derived
+views in ``schemas/views/*.sql`` are created after the table views.
+
+A read-only connection (what :func:`query` and ``handdb sql`` use) is sealed with DuckDB's
+own settings once the views exist: external access is off, so no statement reads or writes
+any file (``COPY ... TO``, ``ATTACH``, ``EXPORT DATABASE``, ``read_csv``, extensions), and
+the configuration is locked, so no statement turns it back on. DuckDB's catalog lives in
+memory: a statement may create a table there, never a file.
 """
 
 from __future__ import annotations
 
+import warnings
+
 import duckdb
 import pyarrow as pa
+import pyarrow.dataset as ds
+import pyarrow.fs as pafs
+import pyarrow.parquet as pq
 
+from handdb.errors import DamagedFileWarning, QueryError
 from handdb.paths import SCHEMAS_DIR
 from handdb.store import tables
-from handdb.store.database import PARQUET_SUFFIX, Store
+from handdb.store.database import DAMAGE_ERRORS, Store
 
 VIEWS_DIR = SCHEMAS_DIR / "views"
 
+#: DuckDB settings that seal a read-only connection, in order (the lock comes last).
+READ_ONLY_SETTINGS: tuple[tuple[str, bool], ...] = (
+    ("python_enable_replacements", False),
+    ("enable_external_access", False),
+    ("lock_configuration", True),
+)
 
-def _quote(text: str) -> str:
-    return "'" + text.replace("'", "''") + "'"
+
+def arrow_filesystem(store: Store) -> pafs.FileSystem:
+    """The store's filesystem as Arrow reads it."""
+    if store.is_local:
+        return pafs.LocalFileSystem()
+    return pafs.PyFileSystem(pafs.FSSpecHandler(store.fs))
 
 
-def connect(db: str | Store, *, database: str = ":memory:") -> duckdb.DuckDBPyConnection:
+def table_rows(store: Store, table: str) -> ds.Dataset | pa.Table:
+    """The committed rows of ``table``: a dataset over its readable files, or an empty table.
+
+    A file whose Parquet footer does not read is left out, with a
+    :class:`~handdb.errors.DamagedFileWarning` naming it.
+    """
+    filesystem = arrow_filesystem(store)
+    files = [path for path in store.table_files(table) if _readable(store, path, filesystem)]
+    if not files:
+        return tables.empty(table)
+    return ds.dataset(files, schema=tables.schema(table), format="parquet",
+                      filesystem=filesystem)
+
+
+def _readable(store: Store, path: str, filesystem: pafs.FileSystem) -> bool:
+    """Whether the Parquet file at ``path`` opens; warn, naming it, when it does not."""
+    try:
+        pq.read_metadata(path, filesystem=filesystem)
+    except DAMAGE_ERRORS as exc:
+        warnings.warn(DamagedFileWarning(
+            f"left out {store.uri(store.relative(path))}: it is damaged ({exc}); build the "
+            "database again to write it from the inbox"), stacklevel=2)
+        return False
+    return True
+
+
+def connect(db: str | Store, *, database: str = ":memory:", read_only: bool = False
+            ) -> duckdb.DuckDBPyConnection:
     """Open a DuckDB connection with a view for every table of the database at ``db``.
 
     Parameters
@@ -31,27 +84,40 @@ def connect(db: str | Store, *, database: str = ":memory:") -> duckdb.DuckDBPyCo
         Database folder or fsspec URL, or a :class:`~handdb.store.database.Store`.
     database
         DuckDB's own database (in memory by default: the data stays in Parquet).
+    read_only
+        Seal the connection once the views exist (:data:`READ_ONLY_SETTINGS`): its
+        statements can read the views and nothing else, and write no file.
     """
     store = db if isinstance(db, Store) else Store(str(db))
     con = duckdb.connect(database)
-    if not store.is_local:
-        con.register_filesystem(store.fs)
     for name in tables.table_names():
-        if store.table_files(name):
-            pattern = store.uri(name, f"*{PARQUET_SUFFIX}")
-            con.execute(
-                f"CREATE OR REPLACE VIEW {name} AS SELECT * FROM "
-                f"read_parquet({_quote(pattern)}, union_by_name = true)"
-            )
-        else:
-            con.register(f"_empty_{name}", tables.empty(name))
-            con.execute(f"CREATE OR REPLACE VIEW {name} AS SELECT * FROM _empty_{name}")
+        con.register(f"_rows_{name}", table_rows(store, name))
+        con.execute(f"CREATE OR REPLACE VIEW {name} AS SELECT * FROM _rows_{name}")
     for sql in sorted(VIEWS_DIR.glob("*.sql")):
         con.execute(sql.read_text())
+    if read_only:
+        for name, value in READ_ONLY_SETTINGS:
+            con.execute(f"SET {name} = {str(value).lower()}")
     return con
 
 
 def query(db: str | Store, sql: str) -> pa.Table:
-    """Run ``sql`` against the database at ``db`` and return the result as Arrow."""
-    with connect(db) as con:
-        return con.sql(sql).to_arrow_table()
+    """Run ``sql`` on a read-only connection to the database at ``db``; return the result.
+
+    Raises
+    ------
+    DatabasePathError
+        When there is no database at ``db``.
+    QueryError
+        When ``sql`` holds no statement with a result.
+    duckdb.Error
+        When DuckDB refuses the statement (a file access among them).
+    """
+    store = db if isinstance(db, Store) else Store(str(db))
+    store.check_readable()
+    with connect(store, read_only=True) as con:
+        relation = con.sql(sql)
+        if relation is None:
+            raise QueryError(f"the statement {sql.strip()[:80]!r} holds no query: give one "
+                             "with a result, e.g. 'SELECT clip_id, n_frames FROM clips'")
+        return relation.to_arrow_table()
