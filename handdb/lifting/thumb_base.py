@@ -208,12 +208,10 @@ def clip_heights(heights: np.ndarray) -> tuple[list[float], float]:
         return [HEIGHT_PRIOR[0]], float(SPREAD_GRID[-1])
     pick = known[np.unique(np.linspace(0, len(known) - 1, min(len(known), HEIGHT_FRAMES))
                            .round().astype(np.int64))]
-    h = heights[:, pick]                                                 # (2, N)
-    grid, spreads = HEIGHT_GRID[:, None, None], SPREAD_GRID[None, :, None]
-    density = 0.5 * (np.exp(log_normal(h[0][None, None], grid, spreads))
-                     + np.exp(log_normal(h[1][None, None], grid, spreads)))
-    curves = (np.log(density + outlier_density()).sum(axis=-1)
-              + log_prior(HEIGHT_GRID)[:, None])                         # (H, S)
+    curves = np.empty((len(HEIGHT_GRID), len(SPREAD_GRID)))
+    _mixture_log_likelihood(np.ascontiguousarray(heights[:, pick]), HEIGHT_GRID,
+                            SPREAD_GRID, outlier_density(), curves)
+    curves += log_prior(HEIGHT_GRID)[:, None]                            # (H, S)
     best = np.unravel_index(np.argmax(curves), curves.shape)
     spread = float(SPREAD_GRID[best[1]])
     curve = curves[:, best[1]]
@@ -225,3 +223,25 @@ def clip_heights(heights: np.ndarray) -> tuple[list[float], float]:
             modes.append(float(HEIGHT_GRID[peak]))
             break
     return modes, spread
+
+
+@kernel
+def _mixture_log_likelihood(heights, grid, spreads, floor, out):
+    """Fill ``out`` ``(H, S)`` with the mixture's log-likelihood per clip height and spread.
+
+    ``Σ_n log(½ N(h₊ₙ; grid[i], spreads[s]) + ½ N(h₋ₙ; ...) + floor)`` over the ``(2, N)``
+    ``heights``; see :func:`clip_heights`.
+    """
+    n_points = heights.shape[1]
+    for i in range(grid.shape[0]):
+        for s in range(spreads.shape[0]):
+            sd = spreads[s]
+            log_norm = math.log(sd * math.sqrt(2.0 * math.pi))
+            total = 0.0
+            for n in range(n_points):
+                above = (heights[0, n] - grid[i]) / sd
+                below = (heights[1, n] - grid[i]) / sd
+                density = 0.5 * (math.exp(-0.5 * above * above - log_norm)
+                                 + math.exp(-0.5 * below * below - log_norm))
+                total += math.log(density + floor)
+            out[i, s] = total
