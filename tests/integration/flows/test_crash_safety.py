@@ -20,16 +20,15 @@ import subprocess
 import sys
 import time
 from collections.abc import Callable
+from dataclasses import dataclass
 from importlib.resources import files
 from pathlib import Path
 
 import numpy as np
 import pytest
-from handdb_flows.settings import quick_flows
 
 from handdb.store.database import LOCK_FILE
 from handdb.store.query import query
-from tests.support.building import run
 from tests.support.paths import REPO
 
 pytestmark = pytest.mark.slow
@@ -39,8 +38,9 @@ CLIP_IDS = ("alpha", "bravo", "charlie", "delta", "echo", "foxtrot")
 #: Seconds a build subprocess may take before the test gives up on it.
 BUILD_TIMEOUT_S = 600.0
 POLL_S = 0.02
-#: Seed of the random kill delays.
+#: Seed of the random kill delay, and the share of an uninterrupted build it falls in.
 KILL_SEED = 7
+KILL_SHARE = (0.1, 0.7)
 
 
 def database_digests(db: Path) -> dict[str, str]:
@@ -132,37 +132,53 @@ def inbox(tmp_path_factory, write_clip) -> Path:
     return path
 
 
+@dataclass(frozen=True)
+class Reference:
+    """An uninterrupted build of the inbox: its database and how long it held the lock (s)."""
+
+    db: Path
+    seconds: float
+
+
 @pytest.fixture(scope="module")
-def reference(inbox, tmp_path_factory) -> Path:
-    """An uninterrupted build of the inbox."""
-    db = tmp_path_factory.mktemp("reference") / "db"
-    with quick_flows():
-        summary = run(str(inbox), str(db), workers=2)
-    assert sorted(summary.processed) == sorted(CLIP_IDS) and len(summary.refusals) == 1
-    return db
+def reference(inbox, tmp_path_factory) -> Reference:
+    folder = tmp_path_factory.mktemp("reference")
+    db = folder / "db"
+    process = start_build(inbox, db, folder / "build.log", prefect_home("reference"))
+    locked = seconds_into_build(0.0)(db, process.pid)
+    while not locked() and process.poll() is None:
+        time.sleep(POLL_S)
+    start = time.monotonic()
+    assert process.wait(BUILD_TIMEOUT_S) == 3, (folder / "build.log").read_text()
+    assert n_files(db, "clips") == len(CLIP_IDS) and n_files(db, "quarantine") == 1
+    return Reference(db, time.monotonic() - start)
 
 
 def test_builds_killed_anywhere_then_rerun_end_with_the_uninterrupted_tables(
         inbox, reference, tmp_path):
-    db = tmp_path / "db"
+    db, timed_db = tmp_path / "db", tmp_path / "timed" / "db"
+    timed_db.parent.mkdir()
     home = prefect_home("crash")
-    delay = float(np.random.default_rng(KILL_SEED).uniform(0.0, 8.0))
-    kill_points = {
-        "X-ray measurements written": new_file_in("xray_measurements"),
-        "first clip half committed (joints_3d before clips)": new_file_in("joints_3d"),
-        "one more clip committed": new_file_in("clips"),
-        f"{delay:.1f} s into the build": seconds_into_build(delay),
-    }
-    for name, point in kill_points.items():
-        process = start_build(inbox, db, tmp_path / "killed.log", home)
-        kill_when(process, point(db, process.pid))
-        assert n_files(db, "clips") < len(CLIP_IDS), f"killed too late: {name}"
+    delay = float(np.random.default_rng(KILL_SEED).uniform(*KILL_SHARE)) * reference.seconds
+    kills = [
+        (db, "X-ray measurements written", new_file_in("xray_measurements")),
+        (db, "first clip half committed (joints_3d before clips)", new_file_in("joints_3d")),
+        (db, "one more clip committed", new_file_in("clips")),
+        # A random time, on a database of its own so that every clip is still to build:
+        # a share of the time the uninterrupted build held the lock.
+        (timed_db, f"{delay:.1f} s into the build", seconds_into_build(delay)),
+    ]
+    for target, name, point in kills:
+        process = start_build(inbox, target, tmp_path / "killed.log", home)
+        kill_when(process, point(target, process.pid))
+        assert n_files(target, "clips") < len(CLIP_IDS), f"killed too late: {name}"
     remaining = len(CLIP_IDS) - n_files(db, "clips")
-    final = start_build(inbox, db, tmp_path / "final.log", home)
-    assert final.wait(BUILD_TIMEOUT_S) == 3, (tmp_path / "final.log").read_text()
-    assert not list(db.rglob("*.tmp"))
-    assert database_digests(db) == database_digests(reference)
-    assert table_rows(db) == table_rows(reference)
+    for target in (db, timed_db):
+        final = start_build(inbox, target, tmp_path / "final.log", home)
+        assert final.wait(BUILD_TIMEOUT_S) == 3, (tmp_path / "final.log").read_text()
+        assert not list(target.rglob("*.tmp"))
+        assert database_digests(target) == database_digests(reference.db)
+        assert table_rows(target) == table_rows(reference.db)
     # killed builds leave no runs row; the last one redid at least the uncommitted clips
     [last] = query(str(db), "SELECT n_processed, n_unchanged FROM runs").to_pylist()
     assert last["n_processed"] >= remaining
@@ -180,6 +196,6 @@ def test_a_second_build_started_at_once_is_refused_and_the_first_completes(
     assert sorted(codes) == [1, 3], outputs
     refused = outputs[codes.index(1)]
     assert "is being built by pid" in refused and "wait for that build" in refused
-    assert database_digests(db) == database_digests(reference)
-    assert table_rows(db) == table_rows(reference)
+    assert database_digests(db) == database_digests(reference.db)
+    assert table_rows(db) == table_rows(reference.db)
     assert query(str(db), "SELECT count(*) AS n FROM runs").column("n")[0].as_py() == 1
