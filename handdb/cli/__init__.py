@@ -20,7 +20,6 @@ import typer
 from rich.console import Console
 from rich.markup import escape
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
-from rich.table import Table
 
 from handdb.errors import DamagedFileWarning, HanddbError
 from handdb.paths import DEFAULT_DB, DEFAULT_INBOX
@@ -104,6 +103,8 @@ Inbox = Annotated[str, typer.Option("--inbox", envvar="HANDDB_INBOX",
 Db = Annotated[str, typer.Option("--db", envvar="HANDDB_DB",
                                  help="Database folder or fsspec URL (e.g. s3://bucket/db).")]
 
+#: Rows ``handdb sql`` shows in a table unless ``--max-rows`` says otherwise.
+TABLE_ROWS = 40
 #: Exit status when some inputs were quarantined but every other clip went through.
 EXIT_QUARANTINED = 3
 #: Exit status when a stage failed on a clip.
@@ -220,17 +221,27 @@ def build(
 
 @app.command()
 def sql(
-    statement: Annotated[str, typer.Argument(help="SQL; every table is a view of its name.")],
+    statement: Annotated[str, typer.Argument(
+        help="SQL; every table is a view of its name. '-' reads it from standard input.")],
     db: Db = DEFAULT_DB,
     format: Annotated[OutputFormat, typer.Option(
         "--format", "-f", help="table, csv (a header line, then rows) or json.")
     ] = OutputFormat.table,
+    max_rows: Annotated[int, typer.Option(
+        min=0, help="Rows a table shows: the first and last, and how many were left out; "
+        "0 shows every row. csv and json print every row.")] = TABLE_ROWS,
+    vertical: Annotated[bool, typer.Option(
+        help="Print a table with one line per column, for wide rows.")] = False,
 ) -> None:
     """Run a SQL query against the database with DuckDB and print the result."""
+    import shutil
+
     import duckdb
 
     from handdb.store.query import query
 
+    if statement == "-":
+        statement = sys.stdin.read()
     try:
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always", DamagedFileWarning)
@@ -251,12 +262,12 @@ def sql(
     elif format is OutputFormat.json:
         out.print_json(json.dumps(result.to_pylist(), default=str))
     else:
-        grid = Table(show_lines=False)
-        for name in result.column_names:
-            grid.add_column(name, overflow="fold")
-        for row in result.to_pylist():
-            grid.add_row(*("" if v is None else str(v) for v in row.values()))
-        out.print(grid)
+        # DuckDB's own rendering: NULL as NULL, widths that fit the terminal, elided rows
+        # and columns counted.
+        duckdb.connect().from_arrow(result).show(
+            max_rows=max_rows or max(result.num_rows, 1),
+            max_width=shutil.get_terminal_size().columns,
+            render_mode="columns" if vertical else "rows")
 
 
 @app.command()

@@ -75,3 +75,45 @@ def test_build_exit_status_when_input_is_quarantined(tmp_path, write_clip):
     assert result.exit_code == EXIT_QUARANTINED, result.output
     assert "quarantined" in result.output and "bad.clip.json" in result.output
     assert "1 processed" in result.output
+
+
+@pytest.fixture
+def long_db(tmp_path):
+    store = Store(str(tmp_path / "db"))
+    n = 500
+    store.write("truth_3d", "a", tables.from_columns("truth_3d", {
+        "clip_id": "a", "frame": list(range(n)), "joint": ["wrist"] * n,
+        "joint_index": [0] * n, "x": [0.5] * n, "y": [0.0] * n, "z": [10.0] * n}))
+    return str(tmp_path / "db")
+
+
+def table_lines(output: str) -> list[str]:
+    """The lines of a printed table that hold a row of values."""
+    return [line for line in output.splitlines() if line.startswith("│") and "wrist" in line]
+
+
+def test_sql_table_shows_a_capped_number_of_rows_and_says_how_many(long_db):
+    result = runner.invoke(app, ["sql", "--db", long_db, "--max-rows", "10",
+                                 "SELECT * FROM truth_3d ORDER BY frame"])
+    assert result.exit_code == 0, result.output
+    assert len(table_lines(result.stdout)) == 10
+    assert "500 rows (10 shown)" in result.stdout
+    every = runner.invoke(app, ["sql", "--db", long_db, "--max-rows", "0",
+                                "SELECT * FROM truth_3d"])
+    assert len(table_lines(every.stdout)) == 500
+
+
+def test_sql_table_prints_null_as_null_and_reads_the_query_from_stdin(db):
+    result = runner.invoke(app, ["sql", "--db", db, "-"],
+                           input="SELECT NULL AS nothing, true AS yes FROM truth_3d LIMIT 1")
+    assert result.exit_code == 0, result.output
+    [row] = [line for line in result.stdout.splitlines() if "NULL" in line and "│" in line]
+    assert "true" in row and "True" not in row
+
+
+def test_sql_vertical_prints_one_line_per_column(db):
+    result = runner.invoke(app, ["sql", "--db", db, "--vertical",
+                                 "SELECT clip_id, frame, x FROM truth_3d LIMIT 1"])
+    assert result.exit_code == 0, result.output
+    lines = [line for line in result.stdout.splitlines() if line.startswith("│")]
+    assert [line.split("│")[1].strip() for line in lines[1:]] == ["clip_id", "frame", "x"]
