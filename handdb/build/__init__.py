@@ -73,7 +73,9 @@ def run_build(inbox: str | Path, db: str, options: BuildOptions | None = None, *
     with Store(db).lock():
         pass
     plan = plan_build(inbox, db, options)
-    if plan.nothing_to_do or runner == LOCAL_RUNNER:
+    # Without a clip to process, what is left (the X-ray tables, the quarantine, the run
+    # record) takes milliseconds here and seconds to start an orchestrator for.
+    if not plan.todo or runner == LOCAL_RUNNER:
         return build_in_process(inbox, db, options, workers=workers, plan=plan)
     return runner_orchestrator(runner).build(str(inbox), db, options, runner=runner,
                                              workers=workers, address=address)

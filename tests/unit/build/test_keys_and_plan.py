@@ -1,8 +1,10 @@
 """The build's plan: stage keys decide which clips, and which of their stages, run again."""
 
 import hashlib
+import shutil
 import subprocess
 import sys
+from importlib.resources import files
 from pathlib import Path
 
 import pytest
@@ -10,6 +12,7 @@ import pytest
 from handdb import gapfill, lifting
 from handdb.build import BuildOptions, build_in_process, plan_build
 from handdb.build.keys import STAGES, stage_keys
+from handdb.store.query import query
 
 
 def digests(db: Path) -> dict[str, str]:
@@ -90,3 +93,18 @@ def test_nothing_to_do_never_starts_prefect(built):
     out = subprocess.run([sys.executable, "-c", code, str(inbox), db], capture_output=True,
                          text=True, check=True).stdout
     assert out.split() == ["3", "False"]
+
+
+def test_an_empty_inbox_builds_without_prefect_and_stores_the_xray_tables(tmp_path):
+    inbox, db = tmp_path / "inbox", str(tmp_path / "db")
+    inbox.mkdir()
+    shutil.copyfile(str(files("handdb") / "data" / "chaudhry_table1.xray.csv"),
+                    inbox / "chaudhry_table1.xray.csv")
+    code = ("import sys; from handdb.build import run_build; "
+            "s = run_build(sys.argv[1], sys.argv[2], runner='thread'); "
+            "print(s.n_clips, 'prefect' in sys.modules)")
+    out = subprocess.run([sys.executable, "-c", code, str(inbox), db], capture_output=True,
+                         text=True, check=True).stdout
+    assert out.split() == ["0", "False"]
+    assert query(db, "SELECT count(*) AS n FROM xray_measurements").column("n")[0].as_py() > 0
+    assert query(db, "SELECT count(*) AS n FROM runs").column("n")[0].as_py() == 1
