@@ -21,7 +21,7 @@ from rich.console import Console
 from rich.markup import escape
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
-from handdb.errors import DamagedFileWarning, HanddbError
+from handdb.errors import DamagedFileWarning, HanddbError, UnknownNameError
 from handdb.paths import DEFAULT_DB, DEFAULT_INBOX
 
 #: Sub-commands whose modules are imported only when they run, so that ``handdb --help``
@@ -268,6 +268,59 @@ def sql(
             max_rows=max_rows or max(result.num_rows, 1),
             max_width=shutil.get_terminal_size().columns,
             render_mode="columns" if vertical else "rows")
+
+
+@app.command("tables")
+def list_tables() -> None:
+    """List the database's tables and derived views, and what each holds."""
+    from rich.table import Table
+
+    from handdb.store import tables
+    from handdb.store.query import derived_views
+
+    grid = Table("name", "kind", "one row per / what it holds", show_lines=False)
+    for name in tables.table_names():
+        grid.add_row(name, "table", tables.table_spec(name).description)
+    for name, description in derived_views().items():
+        grid.add_row(name, "view", description)
+    out.print(grid)
+    out.print("Columns, their types and units: handdb describe NAME")
+
+
+@app.command()
+def describe(
+    name: Annotated[str, typer.Argument(help="A table or view (see handdb tables).")],
+    db: Db = DEFAULT_DB,
+) -> None:
+    """Print a table's columns: their type, whether they may be NULL, and what they hold.
+
+    A table's columns come from its contract and need no database; a derived view's are
+    read from the database at --db.
+    """
+    from rich.table import Table
+
+    from handdb.store import tables
+    from handdb.store.query import derived_views, query
+
+    grid = Table("column", "type", "NULL", "what it holds (units)", title=name)
+    if name in tables.table_names():
+        for field in tables.schema(name):
+            doc = field.metadata.get(b"doc", b"").decode() if field.metadata else ""
+            grid.add_row(field.name, str(field.type), "yes" if field.nullable else "no", doc)
+    elif name in derived_views():
+        try:
+            columns = query(db, f"DESCRIBE {name}").to_pylist()
+        except HanddbError as exc:
+            print_error(exc)
+            raise typer.Exit(EXIT_FAILED) from None
+        for column in columns:
+            grid.add_row(column["column_name"], column["column_type"], column["null"].lower(),
+                         "")
+    else:
+        print_error(UnknownNameError("table or view", name,
+                                     (*tables.table_names(), *derived_views())))
+        raise typer.Exit(EXIT_FAILED)
+    out.print(grid)
 
 
 @app.command()

@@ -19,6 +19,7 @@ memory: a statement may create a table there, never a file.
 from __future__ import annotations
 
 import warnings
+from functools import cache
 
 import duckdb
 import pyarrow as pa
@@ -74,6 +75,38 @@ def _readable(store: Store, path: str, filesystem: pafs.FileSystem) -> bool:
     return True
 
 
+def _quoted(text: str) -> str:
+    """``text`` as a SQL string literal."""
+    return "'" + text.replace("'", "''") + "'"
+
+
+@cache
+def derived_views() -> dict[str, str]:
+    """The derived views of ``schemas/views``: name -> what the comment opening it says."""
+    return {path.stem: path.read_text().splitlines()[0].removeprefix("--").strip()
+            for path in sorted(VIEWS_DIR.glob("*.sql"))}
+
+
+@cache
+def comment_statements() -> str:
+    """``COMMENT ON`` statements: every view's description and its columns' docs.
+
+    Table views take them from their contracts (``schemas/tables``), derived views from
+    their files' opening comment. DuckDB shows them in ``duckdb_views()`` and
+    ``duckdb_columns()`` (``comment``).
+    """
+    statements = [f"COMMENT ON VIEW {name} IS {_quoted(text)}"
+                  for name, text in derived_views().items()]
+    for name in tables.table_names():
+        spec = tables.table_spec(name)
+        statements.append(f"COMMENT ON VIEW {name} IS {_quoted(spec.description)}")
+        statements += [
+            f"COMMENT ON COLUMN {name}.{field.name} IS "
+            f"{_quoted(field.metadata[b'doc'].decode())}"
+            for field in spec.schema if field.metadata and field.metadata.get(b"doc")]
+    return ";\n".join(statements) + ";"
+
+
 def connect(db: str | Store, *, database: str = ":memory:", read_only: bool = False
             ) -> duckdb.DuckDBPyConnection:
     """Open a DuckDB connection with a view for every table of the database at ``db``.
@@ -91,10 +124,10 @@ def connect(db: str | Store, *, database: str = ":memory:", read_only: bool = Fa
     store = db if isinstance(db, Store) else Store(str(db))
     con = duckdb.connect(database)
     for name in tables.table_names():
-        con.register(f"_rows_{name}", table_rows(store, name))
-        con.execute(f"CREATE OR REPLACE VIEW {name} AS SELECT * FROM _rows_{name}")
+        con.from_arrow(table_rows(store, name)).create_view(name, replace=True)
     for sql in sorted(VIEWS_DIR.glob("*.sql")):
         con.execute(sql.read_text())
+    con.execute(comment_statements())
     if read_only:
         for name, value in READ_ONLY_SETTINGS:
             con.execute(f"SET {name} = {str(value).lower()}")

@@ -117,3 +117,35 @@ def test_sql_vertical_prints_one_line_per_column(db):
     assert result.exit_code == 0, result.output
     lines = [line for line in result.stdout.splitlines() if line.startswith("│")]
     assert [line.split("│")[1].strip() for line in lines[1:]] == ["clip_id", "frame", "x"]
+
+
+def test_tables_lists_every_table_and_view_with_its_description():
+    from handdb.store.query import derived_views
+
+    result = runner.invoke(app, ["tables"])
+    assert result.exit_code == 0, result.output
+    for name in [*tables.table_names(), *derived_views()]:
+        assert name in result.stdout
+    assert "_rows" not in result.stdout
+
+
+def test_describe_prints_a_tables_columns_with_their_docs():
+    result = runner.invoke(app, ["describe", "joints_3d"])
+    assert result.exit_code == 0, result.output
+    for field in tables.schema("joints_3d"):
+        assert field.name in result.stdout
+    doc = tables.schema("joints_3d").field("z").metadata[b"doc"].decode()
+    assert all(word in result.stdout for word in doc.split())  # wrapped in its cell
+    unknown = runner.invoke(app, ["describe", "joint_3d"])
+    assert unknown.exit_code == 1 and "joints_3d" in unknown.output
+
+
+def test_views_carry_the_contracts_comments_and_show_tables_lists_no_internals(db):
+    result = runner.invoke(app, ["sql", "--db", db, "-f", "json",
+                                 "SELECT comment FROM duckdb_columns() WHERE "
+                                 "table_name = 'truth_3d' AND column_name = 'x'"])
+    [row] = json.loads(result.stdout)
+    assert row["comment"] == tables.schema("truth_3d").field("x").metadata[b"doc"].decode()
+    shown = runner.invoke(app, ["sql", "--db", db, "-f", "csv", "SHOW TABLES"])
+    names = shown.stdout.split()[1:]
+    assert sorted(names) == sorted([*tables.table_names(), "clip_summary", "depth_error"])
