@@ -24,7 +24,7 @@ from handdb.errors import DamagedFileError, InputError
 from handdb.ingest import clip_content_hash, discover
 from handdb.ingest.inbox import ClipEntry
 from handdb.ingest.registry import MARKERS_KIND, get_format
-from handdb.ingest.xray import XRAY_SUFFIX, read_xray
+from handdb.ingest.xray import MAX_XRAY_NAME_BYTES, XRAY_SUFFIX, read_xray
 from handdb.lengths.ratios import joint_ratios
 from handdb.store import tables
 from handdb.store.database import Store
@@ -162,6 +162,12 @@ def read_xray_inputs(paths: list[Path], store: Store) -> XrayInputs:
     refusals: list[Refusal] = []
     changed: dict[str, pa.Table] = {}
     for path in sorted(paths):
+        if len(path.name.removesuffix(XRAY_SUFFIX).encode()) > MAX_XRAY_NAME_BYTES:
+            refusals.append(Refusal.from_error(InputError(
+                path, f"has a name of {len(path.name.encode())} bytes: the database stores "
+                f"an X-ray file under its name, so give it at most {MAX_XRAY_NAME_BYTES} "
+                f"bytes before '{XRAY_SUFFIX}'", field="file name")))
+            continue
         measurements, errors = read_xray(path)
         refusals += [Refusal.from_error(error) for error in errors]
         if errors and measurements.num_rows == 0:
@@ -202,7 +208,11 @@ def plan_build(inbox: str | Path, db: str, options: BuildOptions) -> BuildPlan:
         if twin is not None:
             refusals.append(Refusal.from_error(twin))
             continue
-        digest = clip_content_hash(entry)
+        try:
+            digest = clip_content_hash(entry)
+        except InputError as error:
+            refusals.append(Refusal.from_error(error))
+            continue
         markers = get_format(entry.track_format).kind == MARKERS_KIND
         keys = stage_keys(digest, options, ratios_hash, marker_clip=markers)
         start = first_changed_stage(keys, stored.get(entry.clip_id))

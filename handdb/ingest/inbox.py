@@ -29,6 +29,7 @@ from handdb.hand.skeletons import load_skeleton
 from handdb.ingest.limits import (
     MAX_COORDINATE_METRES,
     MAX_PIXEL_COORDINATE,
+    checked_size,
     file_kind,
     folder_files,
     quoted,
@@ -47,6 +48,8 @@ from handdb.ingest.registry import (
 from handdb.ingest.sidecar import parse_sidecar, validate_clip_id
 
 SIDECAR = "sidecar"
+#: Bytes read at a time when hashing an input file.
+HASH_CHUNK_BYTES = 1 << 20
 
 
 @dataclass(frozen=True)
@@ -118,7 +121,11 @@ def _entries(inbox: Path) -> Iterator[tuple[str, str, str, Path]]:
 
 def _link_refusal(path: Path, inbox: Path) -> InputError | None:
     """The refusal of a symbolic link ``path`` that leaves ``inbox`` or leads nowhere."""
-    target = path.resolve()
+    try:
+        target = path.resolve()
+    except (OSError, RuntimeError):  # a loop of links (RuntimeError before Python 3.13)
+        return InputError(path, "is a symbolic link that leads back to itself (a loop of "
+                          "links); replace it with the file it should point to")
     if target.is_relative_to(inbox.resolve()) and target.exists():
         return None
     shown = os.readlink(path) if path.is_symlink() else str(target)
@@ -254,8 +261,12 @@ def inbox_relative(path: str | Path, inbox: str | Path) -> str:
 
 
 def _files(path: Path) -> list[Path]:
-    """``path`` itself, or the files of the folder ``path`` a reader may read."""
-    return folder_files(path) if path.is_dir() else [path]
+    """``path`` itself, or the files of the folder ``path`` its reader reads."""
+    if not path.is_dir():
+        return [path]
+    match = match_format(path)
+    members = match[0].members if match is not None else None
+    return members(path) if members is not None else folder_files(path)
 
 
 def clip_content_hash(entry: ClipEntry) -> str:
@@ -264,15 +275,24 @@ def clip_content_hash(entry: ClipEntry) -> str:
     The sidecar comes first, then the track file (a folder's files in name order), then
     the truth file; each contributes its path relative to the inbox, its size and its
     bytes, so renaming, editing or moving bytes between files changes the hash. A folder
-    contributes the files :func:`~handdb.ingest.limits.folder_files` lists, the ones its
-    reader may read.
+    contributes the files its reader reads (:attr:`InputFormat.members
+    <handdb.ingest.registry.InputFormat.members>`). Files are read in chunks, each
+    checked against :data:`~handdb.ingest.limits.MAX_FILE_BYTES` first.
+
+    Raises
+    ------
+    InputError
+        If a file is not a regular file or is larger than the limit.
     """
     digest = hashlib.sha256()
     for path in entry.paths:
         for file in _files(path):
-            data = file.read_bytes()
+            size = checked_size(file)
             digest.update(file.relative_to(entry.inbox).as_posix().encode() + b"\0")
-            digest.update(f"{len(data)}\0".encode() + data)
+            digest.update(f"{size}\0".encode())
+            with file.open("rb") as stream:
+                while chunk := stream.read(HASH_CHUNK_BYTES):
+                    digest.update(chunk)
     return digest.hexdigest()
 
 

@@ -33,6 +33,15 @@ MAX_JSON_INTEGER_DIGITS = 30
 #: The highest frame rate accepted, frames per second (high-speed marker systems reach
 #: a few thousand).
 MAX_FPS = 10_000.0
+#: The lowest, frames per second: below it a track is not motion capture.
+MIN_FPS = 1.0
+
+#: The range a bone length given in a sidecar may lie in, metres: finger bones are 1-10 cm,
+#: the whole hand about 20; an animated hand may be larger, a number outside this range is
+#: a unit or typing mistake.
+BONE_LENGTH_RANGE_METRES = (1e-3, 0.5)
+#: The range of a sidecar's ``hand_length``, metres.
+HAND_LENGTH_RANGE_METRES = (0.03, 1.0)
 
 #: The largest image side accepted, pixels.
 MAX_IMAGE_SIDE = 100_000

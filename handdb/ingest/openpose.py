@@ -293,6 +293,11 @@ def write(path: str | Path, uv: np.ndarray, confidence: np.ndarray | None,
         (folder / f"{stem}_{t:012d}_keypoints.json").write_text(json.dumps(doc))
 
 
+def keypoint_files(folder: Path) -> list[Path]:
+    """The folder's keypoint files, by frame (see :func:`frame_files`)."""
+    return [path for _, path in frame_files(folder)]
+
+
 FORMAT = InputFormat(name="openpose", suffix=".openpose", kind="tracks", read=read,
                      write=write, directory=True,
-                     sidecar_keys=("person", "coordinates"))
+                     sidecar_keys=("person", "coordinates"), members=keypoint_files)

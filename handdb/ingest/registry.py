@@ -66,6 +66,11 @@ class InputFormat:
     sidecar_keys
         The reader options of the sidecar (:data:`handdb.ingest.sidecar.READER_KEYS`) this
         format reads; a sidecar giving another is refused.
+    members
+        For a folder format, ``members(folder) -> [path]``: the files of the folder its
+        reader reads, which are all the clip's content hash covers (a video beside the
+        keypoint files is neither read nor hashed); ``None``: every visible file
+        (:func:`~handdb.ingest.limits.folder_files`).
     """
 
     name: str
@@ -76,6 +81,7 @@ class InputFormat:
     directory: bool = False
     read_truth: Callable[..., Any] | None = None
     sidecar_keys: tuple[str, ...] = ()
+    members: Callable[[Path], list[Path]] | None = None
 
 
 #: Every input format by name, filled in :mod:`handdb.ingest`.

@@ -40,7 +40,16 @@ from handdb.clip import (
 from handdb.errors import InputError, SkeletonError
 from handdb.hand.skeletons import Skeleton, load_skeleton
 from handdb.ingest.jsondoc import parse_json, preview
-from handdb.ingest.limits import MAX_FPS, MAX_IMAGE_SIDE, MAX_SIDECAR_BYTES, quoted, read_input
+from handdb.ingest.limits import (
+    BONE_LENGTH_RANGE_METRES,
+    HAND_LENGTH_RANGE_METRES,
+    MAX_FPS,
+    MAX_IMAGE_SIDE,
+    MAX_SIDECAR_BYTES,
+    MIN_FPS,
+    quoted,
+    read_input,
+)
 from handdb.ingest.registry import FORMATS
 
 #: A clip id, matched against the whole name: letters, digits, ``.``, ``_``, ``-``; no
@@ -113,10 +122,21 @@ def _whole(value: Any, path: str, field: str, *, minimum: int = 0) -> int:
 
 def _fps(doc: dict, path: str) -> float:
     fps = _number(doc, "fps", path)
-    if fps > MAX_FPS:
-        raise InputError(path, f"{fps:g} is not a plausible frame rate (0 to {MAX_FPS:g})",
-                         field="fps")
+    if not MIN_FPS <= fps <= MAX_FPS:
+        raise InputError(path, f"{fps:g} is not a plausible frame rate ({MIN_FPS:g} to "
+                         f"{MAX_FPS:g})", field="fps")
     return fps
+
+
+def _length(value: float, units: str, valid: tuple[float, float], field: str,
+            path: str) -> float:
+    """``value`` (``units``) if it lies in the range ``valid`` (metres), else refuse it."""
+    low, high = (bound / METERS_PER_UNIT[units] for bound in valid)
+    if not low <= value <= high:
+        raise InputError(path, f"{value:g} {units} is not a plausible length here (from "
+                         f"{low:g} to {high:g} {units}); check the value and the sidecar's "
+                         "'units'", field=field)
+    return value
 
 
 def _camera(doc: Any, path: str) -> Camera:
@@ -298,10 +318,13 @@ def parse_sidecar_text(text: str, path: str, clip_id: str, *,
             raise InputError(
                 path, f"'{joint}' is not a bone of skeleton '{skeleton.name}' (a bone is "
                 "named by its child joint)", field="bone_lengths")
-        bone_lengths[joint] = _number({f"bone_lengths.{joint}": length},
-                                      f"bone_lengths.{joint}", path)
+        key = f"bone_lengths.{joint}"
+        bone_lengths[joint] = _length(_number({key: length}, key, path), units,
+                                      BONE_LENGTH_RANGE_METRES, key, path)
 
-    hand_length = _number(doc, "hand_length", path) if "hand_length" in doc else None
+    hand_length = (_length(_number(doc, "hand_length", path), units,
+                           HAND_LENGTH_RANGE_METRES, "hand_length", path)
+                   if "hand_length" in doc else None)
 
     min_conf = DEFAULT_MIN_CONFIDENCE
     if "min_confidence" in doc:

@@ -35,6 +35,10 @@ from handdb.store import tables
 
 #: The file name suffix the inbox recognises.
 XRAY_SUFFIX = ".xray.csv"
+#: Longest name an X-ray file may have before its suffix, bytes: the name becomes the
+#: key of its partition of ``xray_measurements``, a file name in the store (whose file
+#: systems allow 255 bytes, with room left for the store's suffixes).
+MAX_XRAY_NAME_BYTES = 128
 
 #: Segments measured on each finger, from its root.
 SEGMENTS: dict[str, tuple[str, ...]] = {

@@ -164,6 +164,17 @@ CASES = {
         "c1.clip.json", 1, None, "holds an integer of 5000 digits"),
     "side_fps_1e300": Case(lambda d: tracks(d, ROWS, fps=1e300), "c1.clip.json", None, "fps",
                            "not a plausible frame rate"),
+    "side_fps_1e-300": Case(lambda d: tracks(d, ROWS, fps=1e-300), "c1.clip.json", None,
+                            "fps", "not a plausible frame rate \\(1 to"),
+    "side_bone_1e300": Case(lambda d: tracks(d, ROWS, bone_lengths={"index_pip": 1e300}),
+                            "c1.clip.json", None, "bone_lengths.index_pip",
+                            "1e\\+300 mm is not a plausible length here \\(from 1 to 500 mm\\)"),
+    "side_bone_1e-300": Case(lambda d: tracks(d, ROWS, bone_lengths={"index_pip": 1e-300}),
+                             "c1.clip.json", None, "bone_lengths.index_pip",
+                             "not a plausible length here"),
+    "side_hand_length_in_metres_as_mm": Case(lambda d: tracks(d, ROWS, hand_length=0.19),
+                                             "c1.clip.json", None, "hand_length",
+                                             "check the value and the sidecar's 'units'"),
     "side_fps_nan": Case(lambda d: tracks(d, ROWS) or sidecar(
         d, text=json.dumps(SIDECAR).replace('"fps": 30', '"fps": NaN')), "c1.clip.json", None,
         "fps", "must be a finite number, got NaN"),
@@ -324,6 +335,9 @@ SCAN_CASES = {
                       "c1.tracks.csv", None, "symbolic link to /dev/zero, outside the inbox"),
     "link_dangling": (lambda d, t: sidecar(d) or os.symlink(d / "nowhere", d / "c1.tracks.csv"),
                       "c1.tracks.csv", None, "which does not exist"),
+    "link_loop": (lambda d, t: sidecar(d) or os.symlink(d / "c1.tracks.csv",
+                                                        d / "c1.tracks.csv"),
+                  "c1.tracks.csv", None, "leads back to itself"),
     "sidecar_folder": (lambda d, t: (d / "c1.clip.json").mkdir() or
                        (d / "c1.tracks.csv").write_text(HEADER + ROWS), "c1.clip.json", None,
                        "is a folder; an inbox input must be a file"),
@@ -414,3 +428,23 @@ def test_dlc_split_index_columns_never_count_empty_cells_as_individuals(tmp_path
     clip = load_clip(discover(tmp_path).clips[0])
     assert clip.n_frames == 6
     np.testing.assert_array_equal(clip.uv[4:, 0], [[1, 2], [3, 4]])
+
+
+def test_a_video_beside_openpose_keypoints_is_neither_read_nor_hashed(tmp_path):
+    folder = openpose_folder(tmp_path)
+    entry = discover(tmp_path).clips[0]
+    first = clip_content_hash(entry)
+    with (folder / "video.mp4").open("wb") as video:
+        video.truncate(2 * MAX_FILE_BYTES)  # sparse: no disk, and never read
+    assert clip_content_hash(entry) == first
+    assert load_clip(entry).n_frames == 3
+
+
+def test_an_oversized_track_file_is_refused_by_the_hash_before_it_is_read(tmp_path):
+    tracks(tmp_path, ROWS)
+    with (tmp_path / "c1.tracks.csv").open("r+b") as track:
+        track.truncate(MAX_FILE_BYTES + 1)
+    [entry] = discover(tmp_path).clips
+    with pytest.raises(InputError, match="bytes; handdb reads such files up to") as info:
+        clip_content_hash(entry)
+    assert Path(info.value.file).name == "c1.tracks.csv"
