@@ -48,7 +48,7 @@ from benchmarks.gapfill_datasets import DROPOUT_FRAMES, DROPOUT_SHARE, dropouts 
 from handdb.build.options import BuildOptions  # noqa: E402
 from handdb.build.stages import ClipResult, fill, lift_clip, resolve_bone_lengths  # noqa: E402
 from handdb.clip import Camera, Clip  # noqa: E402
-from handdb.hand.skeletons import FINGERS, Skeleton, load_skeleton  # noqa: E402
+from handdb.hand.skeletons import FINGERS, Skeleton, frame_bone_lengths, load_skeleton  # noqa: E402
 from handdb.ingest.sidecar import parse_sidecar_text  # noqa: E402
 from handdb.lengths.ratios import joint_ratios, table1_measurements  # noqa: E402
 from handdb.lifting import DEFAULT_METHOD as DEFAULT_LIFT  # noqa: E402
@@ -89,6 +89,10 @@ VIEW_SEED, NOISE_SEED = 0, 7
 #: Frames of a synthetic clip; frame rate of every clip.
 SYNTHETIC_FRAMES = 300
 FPS = 30.0
+
+#: Percentiles of a bone's true length over the frames whose gap is its variation (a
+#: tracker's 3D output does not keep its bones' lengths).
+LENGTH_RANGE_PERCENTILES = (5.0, 95.0)
 
 #: Issue 14's targets as a detector gives it, mm.
 TARGET_MPJPE_MM, TARGET_PA_MPJPE_MM = 8.0, 5.0
@@ -268,12 +272,15 @@ class Scores:
     """Errors of every variant pooled over a dataset's clips, and of the estimated lengths.
 
     ``length_errors`` holds, per clip, ``(J,)`` absolute errors (mm) of the lengths the
-    bone lengths stage estimated from five, NaN where given or at the root.
+    bone lengths stage estimated from five, NaN where given or at the root;
+    ``length_ranges`` the ``(J,)`` variation of each true length over the clip's frames
+    (mm, :data:`LENGTH_RANGE_PERCENTILES`); ``sources`` counts the lengths' sources.
     """
 
     skeleton: Skeleton
     errors: dict[str, real_data.Errors] = field(default_factory=dict)
     length_errors: list[np.ndarray] = field(default_factory=list)
+    length_ranges: list[np.ndarray] = field(default_factory=list)
     sources: dict[str, int] = field(default_factory=dict)
 
 
@@ -283,6 +290,9 @@ def score_case(case: Case, scores: Scores, ratios: pa.Table,
     true_lengths = real_data.median_bone_lengths(case.truth, case.skeleton)
     every = {case.skeleton.joints[j]: float(true_lengths[j]) for j in case.skeleton.bones[:, 1]}
     given = {"five": {j: every[j] for j in KNOWN_BONES}, "all": every}
+    low, high = np.percentile(frame_bone_lengths(case.truth, case.skeleton),
+                              LENGTH_RANGE_PERCENTILES, axis=0)
+    scores.length_ranges.append(high - low)
     tracks, confidence = detector_tracks(case.uv, rng)
     inputs = {True: (tracks, confidence), False: (case.uv, np.ones(case.uv.shape[:2]))}
     filled: dict[tuple[str, bool], ClipResult] = {}
@@ -317,14 +327,18 @@ def measure(cases: CaseSource, ratios: pa.Table) -> Scores | None:
 
 
 def length_summary(scores: Scores) -> str:
-    """The estimated lengths' mean and worst error, and where the lengths came from."""
+    """The estimated lengths' mean and worst error, where they came from, and how much the
+    truth's own lengths vary."""
     errors = np.stack(scores.length_errors)
     worst = int(np.argmax(np.where(np.isfinite(errors), errors, -np.inf)) % errors.shape[1])
     sources = ", ".join(f"{s} {n}" for s, n in sorted(scores.sources.items()))
     return (f"Estimated lengths (five given): mean |error| {np.nanmean(errors):.1f} mm over "
             f"{int(np.isfinite(errors).sum())} bones, worst {np.nanmax(errors):.1f} mm "
             f"({scores.skeleton.joints[worst]}, mean there {np.nanmean(errors[:, worst]):.1f}"
-            f" mm); sources: {sources}.")
+            f" mm); sources: {sources}. The truth's own bone lengths vary over the frames by "
+            f"{np.nanmean(np.stack(scores.length_ranges)):.1f} mm (mean over bones and clips "
+            f"of their {LENGTH_RANGE_PERCENTILES[0]:g}-{LENGTH_RANGE_PERCENTILES[1]:g} % "
+            "range).")
 
 
 def section(key: str, title: str, cases: CaseSource | None, ratios: pa.Table
