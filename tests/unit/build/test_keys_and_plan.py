@@ -12,6 +12,7 @@ import pytest
 from handdb import gapfill, lifting
 from handdb.build import BuildOptions, build_in_process, plan_build
 from handdb.build.keys import STAGES, stage_keys
+from handdb.ingest.limits import MAX_FILE_BYTES
 from handdb.store.query import query
 
 
@@ -108,3 +109,21 @@ def test_an_empty_inbox_builds_without_prefect_and_stores_the_xray_tables(tmp_pa
     assert out.split() == ["0", "False"]
     assert query(db, "SELECT count(*) AS n FROM xray_measurements").column("n")[0].as_py() > 0
     assert query(db, "SELECT count(*) AS n FROM runs").column("n")[0].as_py() == 1
+
+
+def test_an_unstorable_xray_name_and_an_oversized_track_are_refused_and_the_rest_builds(
+        inbox, tmp_path):
+    xray = inbox / ("x" * 240 + ".xray.csv")
+    shutil.copyfile(str(files("handdb") / "data" / "chaudhry_table1.xray.csv"), xray)
+    big = inbox / "bravo.tracks.csv"
+    with big.open("r+b") as track:
+        track.truncate(MAX_FILE_BYTES + 1)
+    db = str(tmp_path / "db")
+    summary = build_in_process(inbox, db, BuildOptions(export_usd=False))
+    assert sorted(summary.processed) == ["alpha", "charlie"]
+    refused = {Path(r.file).name: r for r in summary.refusals}
+    assert refused[xray.name].field == "file name"
+    assert "at most 128 bytes" in refused[xray.name].reason
+    assert "handdb reads such files up to" in refused[big.name].reason
+    stored = query(db, "SELECT file FROM quarantine").column("file").to_pylist()
+    assert {Path(f).name for f in stored} >= {xray.name, big.name}
