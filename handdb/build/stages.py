@@ -240,13 +240,23 @@ def _put(store: Store, local: Path, *parts: str) -> str:
 def export(result: ClipResult, store: Store, options: BuildOptions) -> ClipResult:
     """Write the clip's USD animation, preview sheet and validation chart into the database.
 
-    A clip with joints that could not be lifted is not exported (``usd_path`` stays null).
+    A clip with joints that could not be lifted is not exported (``usd_path`` stays null)
+    and says so: the reason joins its flag reasons, the frames and joints its flagged rows.
     """
     clip = result.clip
     lifted = _needs(result.lifted, "lift", result)
     bones = _needs(result.bones, "bone lengths", result)
-    if not options.export_usd or not np.isfinite(lifted.xyz).all():
+    if not options.export_usd:
         return result
+    unplaced = ~np.isfinite(lifted.xyz).all(axis=-1)                       # (T, J)
+    if unplaced.any():
+        frames = np.flatnonzero(unplaced.any(axis=1))
+        reason = (f"no USD or preview written: {unplaced.sum()} joint positions in "
+                  f"{len(frames)} frames (from frame {frames[0]}) could not be placed; "
+                  "fill them ('gap_fill') or cut those frames from the track")
+        verdict = result.verdict or Verdict(reasons=(), rows=np.zeros_like(unplaced))
+        return replace(result, verdict=Verdict(reasons=(*verdict.reasons, reason),
+                                               rows=verdict.rows | unplaced))
     spec = clip.spec
     with tempfile.TemporaryDirectory() as scratch:
         scratch_dir = Path(scratch)

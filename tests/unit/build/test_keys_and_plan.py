@@ -4,15 +4,19 @@ import hashlib
 import shutil
 import subprocess
 import sys
+from dataclasses import replace
 from importlib.resources import files
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from handdb import gapfill, lifting
-from handdb.build import BuildOptions, build_in_process, plan_build
+from handdb.build import BuildOptions, build_in_process, plan_build, stages
 from handdb.build.keys import STAGES, stage_keys
+from handdb.ingest import discover
 from handdb.ingest.limits import MAX_FILE_BYTES
+from handdb.store.database import Store
 from handdb.store.query import query
 
 
@@ -127,3 +131,21 @@ def test_an_unstorable_xray_name_and_an_oversized_track_are_refused_and_the_rest
     assert "handdb reads such files up to" in refused[big.name].reason
     stored = query(db, "SELECT file FROM quarantine").column("file").to_pylist()
     assert {Path(f).name for f in stored} >= {xray.name, big.name}
+
+
+def test_a_clip_whose_joints_cannot_all_be_placed_is_flagged_for_its_missing_export(
+        inbox, tmp_path):
+    options = BuildOptions()
+    [entry] = [e for e in discover(inbox).clips if e.clip_id == "alpha"]
+    result = stages.lift_clip(stages.fill(stages.resolve_bone_lengths(
+        stages.ClipResult(clip=stages.ingest(entry)), None), options), options)
+    result = stages.validate(result, options)
+    xyz = result.lifted.xyz.copy()
+    xyz[10:15, 3] = np.nan
+    unplaced = replace(result, lifted=replace(result.lifted, xyz=xyz))
+    exported = stages.export(unplaced, Store(str(tmp_path / "db")), options)
+    assert exported.usd_path is None
+    [reason] = [r for r in exported.verdict.reasons if r.startswith("no USD")]
+    assert "5 joint positions in 5 frames (from frame 10)" in reason
+    assert exported.verdict.rows[10:15, 3].all() and exported.verdict.flagged
+    assert not list((tmp_path / "db").rglob("*.usd"))
