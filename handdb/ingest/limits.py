@@ -12,6 +12,8 @@ import os
 import stat
 from pathlib import Path
 
+import numpy as np
+
 from handdb.errors import InputError
 
 #: The largest number of frames a clip may span: 9.3 h at 30 fps. Dense ``(T, 21)`` float
@@ -59,6 +61,12 @@ SPARSE_MIN_SPAN = 1000
 #: :data:`SPARSE_MIN_SPAN` frames: below it the frame numbers are not a clip's
 #: (a stray frame 100000 in a 100-frame track, ids of a dataset's global image numbers).
 SPARSE_MIN_FILLED = 0.01
+
+#: The longest run of frames without a point a clip may hold, in frames, when it is also
+#: longer than all the clip's frames with points: beyond both, the frames after it (or
+#: before) are not this clip's (a stray frame 5000 in a 64-frame track), or the clip is
+#: mostly invented; either way gap filling would make up the difference.
+STRAY_GAP_FRAMES = 30
 
 #: The most characters of a cell or name quoted in a message.
 MAX_QUOTED = 40
@@ -128,6 +136,36 @@ def is_sparse(n_filled: int, n_frames: int) -> bool:
     :data:`SPARSE_MIN_FILLED` of them carry a point.
     """
     return n_frames > SPARSE_MIN_SPAN and n_filled < SPARSE_MIN_FILLED * n_frames
+
+
+def longest_empty_run(frames: np.ndarray) -> tuple[int, int]:
+    """The longest run of frame numbers without a point between the given ones.
+
+    Parameters
+    ----------
+    frames
+        ``(N,) int64``: the frames that carry a point, sorted, distinct.
+
+    Returns
+    -------
+    tuple of int
+        The frame that carries a point before the run and the one after it; ``(0, 0)``
+        when there is no run.
+    """
+    if frames.size < 2:
+        return 0, 0
+    gap = int(np.argmax(np.diff(frames)))
+    return int(frames[gap]), int(frames[gap + 1])
+
+
+def is_stray_run(before: int, after: int, n_filled: int) -> bool:
+    """Whether an empty run between frames ``before`` and ``after`` splits unrelated data.
+
+    True when the run is longer than :data:`STRAY_GAP_FRAMES` and than the ``n_filled``
+    frames that carry a point.
+    """
+    empty = after - before - 1
+    return empty > STRAY_GAP_FRAMES and empty > n_filled
 
 
 def visible(name: str) -> bool:

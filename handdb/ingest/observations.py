@@ -18,7 +18,14 @@ import numpy as np
 from handdb.clip import ClipSpec
 from handdb.errors import InputError
 from handdb.hand.skeletons import Skeleton
-from handdb.ingest.limits import MAX_FRAMES, frame_limit_reason, is_sparse, quoted
+from handdb.ingest.limits import (
+    MAX_FRAMES,
+    frame_limit_reason,
+    is_sparse,
+    is_stray_run,
+    longest_empty_run,
+    quoted,
+)
 from handdb.ingest.sidecar import IGNORE_OTHERS
 
 #: A function giving the 1-based line (or ``None``) and the field where a file's ``k``-th
@@ -201,15 +208,27 @@ class _Rows:
                 f"is given twice, here and at {self.where(row)}; keep one of them")
 
     def _check_dense(self) -> None:
-        """Refuse frame numbers that are mostly invented (see ``limits.is_sparse``)."""
-        n_filled = np.unique(self.frame).size
-        if self.n_rows and is_sparse(n_filled, self.n_frames):
+        """Refuse frame numbers that are mostly invented or split by a stray empty run.
+
+        See ``limits.is_sparse`` and ``limits.is_stray_run``.
+        """
+        filled = np.unique(self.frame)
+        if self.n_rows and is_sparse(filled.size, self.n_frames):
             row = int(np.argmax(self.frame))
             raise self.error(
                 row, "frame",
                 f"frame {self.frame[row]} makes a clip of {self.n_frames:,} frames of which "
-                f"only {n_filled} carry a point; number the frames from the clip's start "
+                f"only {filled.size} carry a point; number the frames from the clip's start "
                 "(is this frame number a typo, or an id of a dataset's image?)")
+        before, after = longest_empty_run(filled)
+        if is_stray_run(before, after, filled.size):
+            row = int(np.flatnonzero(self.frame == after)[0])
+            raise self.error(
+                row, "frame",
+                f"frame {after} comes after {after - before - 1:,} frames without a point "
+                f"(from frame {before + 1}), more than the {filled.size} frames that carry "
+                "one: gap filling would invent them. Is the frame number a typo? Else split "
+                "the track into two clips at the empty run")
 
     def _coordinates(self) -> dict[str, np.ndarray]:
         """The rows' coordinates by generic field name, ``(N,)`` each."""

@@ -128,6 +128,11 @@ CASES = {
                          + "100000,wrist,1,2,0.9\n"),
         "c1.tracks.csv", 102, "frame", "frame 100000 makes a clip of 100,001 frames of which "
         "only 101 carry a point"),
+    "csv_stray_frame_within_the_sparse_limit": Case(
+        lambda d: tracks(d, "".join(f"{t},wrist,1,2,0.9\n" for t in range(64))
+                         + "5000,wrist,1,2,0.9\n"),
+        "c1.tracks.csv", 66, "frame", "frame 5000 comes after 4,936 frames without a point "
+        "\\(from frame 64\\), more than the 65 frames"),
     "csv_frame_float": Case(lambda d: tracks(d, "3.0,wrist,1,2,0.9\n"), "c1.tracks.csv", 2,
                             "frame", "'3.0' is not a whole frame number"),
     # numbers and text
