@@ -331,8 +331,8 @@ def check_placeable(missing: np.ndarray, skeleton: Skeleton, never_seen: np.ndar
         f"and {int(empty.sum())} of {empty.size} frames observe no point (frames {shown}"
         f"{more}). Frames sparse in time (labelled images at their frame numbers) are not "
         "a track: number them in order (DeepLabCut: \"frame_from\": \"row\") or drop the "
-        "empty frames; or map a body part to each of those joints; or fill with 'rigid', "
-        "which flags what it cannot place as unfilled"
+        "empty frames; or map a body part to each of those joints; or give the sidecar "
+        "\"gap_fill\": {\"method\": \"rigid\"}, which leaves what it cannot place unfilled"
     )
 
 

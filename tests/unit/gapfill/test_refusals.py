@@ -37,7 +37,7 @@ def test_a_never_seen_joint_and_frames_observing_nothing_are_refused(rapid_clip,
     message = str(info.value)
     assert isinstance(info.value, ClipDataError)
     for part in ("'auto'", "thumb_cmc", "5 of 400 frames observe no point", "frames 100-104",
-                 "'rigid'"):
+                 '"gap_fill": {"method": "rigid"}'):
         assert part in message
 
 
