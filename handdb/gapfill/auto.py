@@ -19,13 +19,15 @@
    extrapolates as far as the gap does): weights inversely proportional to the squared
    validation error. ``long_gaps`` picks one estimate instead (``"chain"``,
    ``"regression"``, or ``"lowrank"``, the iterated PCA of :mod:`handdb.gapfill.lowrank`).
-5. Joints never observed are placed first, by the rest pose fitted to the observed joints
-   of each frame, so that the other joints can lean on them.
+5. Joints never observed are placed first, so that the other joints can lean on them:
+   between their parent and only child where both are observed (a DIP an annotation
+   skips, :func:`~handdb.gapfill.rigid.place_on_chords`, label ``chord``), else by the
+   rest pose fitted to the observed joints of each frame.
 6. Kinematic refinement (:mod:`handdb.gapfill.refine`): filled points are pulled back
    where they would stretch a bone beyond its length.
 
 Each filled point is labelled with the rule that filled it (``rigid``, ``pchip``,
-``validated``, ``rest-pose``).
+``validated``, ``chord``, ``rest-pose``).
 
 The validation's hidden runs and the real gaps are estimated together: one set of
 regression samples, their regressions in shared batches, their chain fills by one compiled
@@ -48,7 +50,12 @@ from handdb.gapfill.palm_frame import palm_motion, to_image, to_palm_frame
 from handdb.gapfill.refine import refine_bone_lengths
 from handdb.gapfill.registry import MethodOutput
 from handdb.gapfill.regression import regression_estimates, regression_samples
-from handdb.gapfill.rigid import carry_along_chains_many, palm_joints, place_from_rest_pose
+from handdb.gapfill.rigid import (
+    carry_along_chains_many,
+    palm_joints,
+    place_from_rest_pose,
+    place_on_chords,
+)
 from handdb.hand.skeletons import Skeleton
 
 #: Longest interior gap (frames) bridged by interpolation rather than by the other joints.
@@ -65,7 +72,7 @@ VALIDATED_ESTIMATES = ("chain", "regression")
 SHOWN_RUNS = 3
 
 #: The labels of the points ``auto`` fills, by the rule that filled them.
-RULE_LABELS = ("rigid", "pchip", *LONG_GAP_RULES, "rest-pose")
+RULE_LABELS = ("rigid", "pchip", *LONG_GAP_RULES, "chord", "rest-pose")
 
 #: Observed runs per joint hidden to weigh the long-gap estimates against each other.
 VALIDATION_GAPS = 3
@@ -386,6 +393,7 @@ def fill_auto(
     smoothed = denoise(uv, missing)[0] if smooth else uv
     placed = (place_from_rest_pose(smoothed, missing, skeleton, never_seen) if never_seen.size
               else smoothed)
+    placed, on_chords = place_on_chords(placed, missing, skeleton, never_seen)
     unknown = missing.copy()
     unknown[:, never_seen] = False
     motion = palm_motion(smoothed, missing, skeleton)
@@ -410,6 +418,7 @@ def fill_auto(
                          (long_gaps, by_model), ("rest-pose", gaps.whole_clip)):
         _, frame, joint = gaps.select(chosen).frames()
         labels[frame, joint] = rule
+    labels[on_chords] = "chord"
     refined = refine_bone_lengths(filled, missing, skeleton, bone_lengths=bone_lengths,
                                   scale=scale)
     return MethodOutput(refined, labels=labels)

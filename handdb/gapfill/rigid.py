@@ -168,6 +168,52 @@ def place_from_rest_pose(
     return filled
 
 
+def place_on_chords(
+    uv: np.ndarray, missing: np.ndarray, skeleton: Skeleton, joints: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """Place never-observed ``joints`` between their observed parent and only child.
+
+    An annotation that skips a joint of a chain (three points per finger: a DIP never
+    marked between the PIP and the tip) still gives the two points around it; the joint
+    lies near the chord joining them, dividing it as the rest pose divides its two
+    bones. The image cannot show how the finger bends there: the lifting meets both bone
+    lengths in depth.
+
+    Parameters
+    ----------
+    uv
+        ``(T, J, 2) float64``, pixels.
+    missing
+        ``(T, J) bool``: points not observed.
+    skeleton
+        Skeleton of ``uv``.
+    joints
+        Joints never observed, indices.
+
+    Returns
+    -------
+    filled
+        ``(T, J, 2) float64``: ``uv`` with the joints placed where their neighbours are
+        observed.
+    placed
+        ``(T, J) bool``: the points placed.
+    """
+    rest = rest_pose_2d(skeleton)
+    filled, placed = uv.copy(), np.zeros(missing.shape, dtype=bool)
+    for joint in joints:
+        parent, children = skeleton.parents[joint], skeleton.children(joint)
+        if parent < 0 or len(children) != 1:
+            continue
+        child = children[0]
+        first = np.linalg.norm(rest[joint] - rest[parent])
+        second = np.linalg.norm(rest[child] - rest[joint])
+        both = ~missing[:, parent] & ~missing[:, child]
+        filled[both, joint] = uv[both, parent] + (first / (first + second)) * (
+            uv[both, child] - uv[both, parent])
+        placed[both, joint] = True
+    return filled, placed
+
+
 def fill_rigid(
     uv: np.ndarray, missing: np.ndarray, skeleton: Skeleton, *, affine: bool = True
 ) -> MethodOutput:

@@ -99,3 +99,18 @@ def test_real_labelled_frames_in_row_order_are_filled(real_tools, tmp_path, indi
     filled = fill_gaps(clip.uv, observed, clip.skeleton, "auto").uv
     assert np.isfinite(filled).all()
     np.testing.assert_array_equal(filled[observed], clip.uv[observed])
+
+
+def test_a_joint_an_annotation_skips_is_placed_on_the_chord_of_its_neighbours(rapid_clip,
+                                                                           mediapipe):
+    dip, pip, tip = (mediapipe.index(f"index_{role}") for role in ("dip", "pip", "tip"))
+    observed = np.ones(rapid_clip.uv.shape[:2], dtype=bool)
+    observed[:, dip] = False
+    result = fill_gaps(rapid_clip.uv, observed, mediapipe, "auto")
+    assert (result.fill_method[:, dip] == "chord").all()
+    chord = rapid_clip.uv[:, tip] - rapid_clip.uv[:, pip]
+    offset = result.uv[:, dip] - rapid_clip.uv[:, pip]
+    share = np.sum(offset * chord, axis=-1) / np.sum(chord * chord, axis=-1)
+    across = np.abs(np.cross(chord, offset)) / np.linalg.norm(chord, axis=-1)
+    assert np.all((share > 0.3) & (share < 0.7))
+    assert np.all(across < 1e-6 * np.linalg.norm(chord, axis=-1))
