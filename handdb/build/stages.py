@@ -29,8 +29,6 @@ from handdb.errors import (
     StageError,
     UnknownNameError,
 )
-from handdb.export.preview import write_preview_png
-from handdb.export.usd import export_clip_usd
 from handdb.gapfill import DEFAULT_METHOD as DEFAULT_GAP_FILL
 from handdb.gapfill import FillResult, fill_gaps
 from handdb.ingest import ClipEntry, load_clip
@@ -257,6 +255,10 @@ def export(result: ClipResult, store: Store, options: BuildOptions) -> ClipResul
         verdict = result.verdict or Verdict(reasons=(), rows=np.zeros_like(unplaced))
         return replace(result, verdict=Verdict(reasons=(*verdict.reasons, reason),
                                                rows=verdict.rows | unplaced))
+    # USD and matplotlib take a second to import: a build with nothing to export skips them
+    from handdb.export.preview import write_preview_png
+    from handdb.export.usd import export_clip_usd
+
     spec = clip.spec
     with tempfile.TemporaryDirectory() as scratch:
         scratch_dir = Path(scratch)

@@ -26,7 +26,6 @@ from importlib import resources
 import numpy as np
 import pyarrow as pa
 import pyarrow.compute as pc
-from scipy import stats
 
 from handdb.errors import ClipDataError, HanddbError, ParameterError, UnknownNameError
 from handdb.hand.skeletons import Skeleton
@@ -154,8 +153,11 @@ def joint_ratios(measurements: pa.Table, decimals: int | None = PAPER_DECIMALS) 
     n = grouped.column("ratio_count").to_numpy()
     mean = grouped.column("ratio_mean").to_numpy()
     std = grouped.column("ratio_stddev").to_numpy(zero_copy_only=False).astype(float)
+    # Student's t quantile; scipy.special, as scipy.stats takes a second to import
+    from scipy.special import stdtrit
+
     with np.errstate(invalid="ignore", divide="ignore"):
-        half_width = stats.t.ppf(0.5 + CONFIDENCE / 2, n - 1) * std / np.sqrt(n)
+        half_width = stdtrit(n - 1, 0.5 + CONFIDENCE / 2) * std / np.sqrt(n)
     defined = n >= 2
     lowest = grouped.column("ratio_min").to_numpy()
     highest = grouped.column("ratio_max").to_numpy()

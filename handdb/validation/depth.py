@@ -14,8 +14,6 @@ from collections.abc import Mapping
 
 import numpy as np
 import pyarrow as pa
-from matplotlib.backends.backend_agg import FigureCanvasAgg
-from matplotlib.figure import Figure
 
 from handdb.clip import METERS_PER_UNIT
 from handdb.hand.skeletons import Skeleton
@@ -209,6 +207,10 @@ def comparison_chart(clip_id: str, table: pa.Table, skeleton: Skeleton) -> bytes
     bytes
         The PNG file's content.
     """
+    # matplotlib takes 0.7 s to import: loaded when a chart is drawn, not with the module
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
     rows = table.to_pylist()
     methods = list(dict.fromkeys(r["method"] for r in rows))
     values = {(r["method"], r["joint"]): r["dz_mean"] for r in rows}
