@@ -16,11 +16,12 @@ try:
 except PackageNotFoundError:  # running from a source tree that was never installed
     __version__ = "0+unknown"
 
-__all__ = ["__version__", "connect", "query"]
+__all__ = ["__version__", "connect", "load_clip", "query"]
 
 #: The public functions, imported on first use so that ``import handdb`` (and the command
 #: line's start) does not load DuckDB and Arrow: name -> defining module.
-_LAZY = {"connect": "handdb.store.query", "query": "handdb.store.query"}
+_LAZY = {"connect": "handdb.store.query", "query": "handdb.store.query",
+         "load_clip": "handdb.store.dataset"}
 
 
 def __getattr__(name: str):
