@@ -1,25 +1,16 @@
 """The detector-input benchmark runs end to end and reports every dataset it has data for."""
 
-import importlib.util
-import sys
-
 import pytest
 
-from tests.support.paths import DHG_SAMPLE, REAL_TOOLS, REPO
-
-SCRIPT = REPO / "benchmarks" / "detector_pipeline.py"
+from tests.support.benchmarks import benchmark_module
+from tests.support.paths import DHG_SAMPLE, REAL_TOOLS
 
 
 @pytest.fixture(scope="module")
 def bench():
-    """``benchmarks/detector_pipeline.py`` as a module (the benchmarks folder is not a
-    package)."""
-    spec = importlib.util.spec_from_file_location("bench_detector_pipeline", SCRIPT)
-    module = importlib.util.module_from_spec(spec)
-    sys.modules[spec.name] = module
-    spec.loader.exec_module(module)
-    yield module
-    del sys.modules[spec.name]
+    """``benchmarks/detector_pipeline.py`` as a module."""
+    with benchmark_module("detector_pipeline") as module:
+        yield module
 
 
 def test_the_quick_run_writes_every_table(bench, tmp_path, capsys):

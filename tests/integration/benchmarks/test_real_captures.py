@@ -1,24 +1,16 @@
 """The real-hands benchmark runs end to end and reports every dataset it has data for."""
 
-import importlib.util
-import sys
-
 import pytest
 
-from tests.support.paths import DHG_SAMPLE, REAL_TOOLS, REPO
-
-SCRIPT = REPO / "benchmarks" / "real_captures.py"
+from tests.support.benchmarks import benchmark_module
+from tests.support.paths import DHG_SAMPLE, REAL_TOOLS
 
 
 @pytest.fixture(scope="module")
 def bench():
-    """``benchmarks/real_captures.py`` as a module (the benchmarks folder is not a package)."""
-    spec = importlib.util.spec_from_file_location("bench_real_captures", SCRIPT)
-    module = importlib.util.module_from_spec(spec)
-    sys.modules[spec.name] = module
-    spec.loader.exec_module(module)
-    yield module
-    del sys.modules[spec.name]
+    """``benchmarks/real_captures.py`` as a module."""
+    with benchmark_module("real_captures") as module:
+        yield module
 
 
 def test_the_quick_run_writes_every_table(bench, tmp_path, capsys):

@@ -1,8 +1,5 @@
 """The benchmark's own machinery: synthetic inboxes, the I/O floor, the growth fit."""
 
-import importlib.util
-import sys
-
 import numpy as np
 import pyarrow.csv as pa_csv
 import pyarrow.parquet as pq
@@ -11,20 +8,14 @@ import pytest
 from handdb.build import stages as pipeline
 from handdb.ingest import discover
 from handdb.store.database import Store
-from tests.support.paths import REPO
-
-RUN_PY = REPO / "benchmarks" / "run.py"
+from tests.support.benchmarks import benchmark_module
 
 
 @pytest.fixture(scope="module")
 def bench():
-    """``benchmarks/run.py`` as a module (the benchmarks folder is not a package)."""
-    spec = importlib.util.spec_from_file_location("bench_run", RUN_PY)
-    module = importlib.util.module_from_spec(spec)
-    sys.modules[spec.name] = module
-    spec.loader.exec_module(module)
-    yield module
-    del sys.modules[spec.name]
+    """``benchmarks/run.py`` as a module."""
+    with benchmark_module("run") as module:
+        yield module
 
 
 def test_fitted_exponent_recovers_power_laws(bench):

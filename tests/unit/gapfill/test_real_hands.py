@@ -6,28 +6,19 @@ RMSE at most a fifth of the best thesis method's) is asserted where the benchmar
 on data held out of tuning.
 """
 
-import importlib.util
-import sys
-
 import numpy as np
 import pytest
 
 from handdb.gapfill.rest_pose import rest_pose_2d
 from handdb.hand.skeletons import load_skeleton
-from tests.support.paths import REPO
-
-DATASETS_PY = REPO / "benchmarks" / "gapfill_datasets.py"
+from tests.support.benchmarks import benchmark_module
 
 
 @pytest.fixture(scope="module")
 def datasets():
-    """``benchmarks/gapfill_datasets.py`` as a module (the folder is not a package)."""
-    spec = importlib.util.spec_from_file_location("gapfill_datasets", DATASETS_PY)
-    module = importlib.util.module_from_spec(spec)
-    sys.modules[spec.name] = module
-    spec.loader.exec_module(module)
-    yield module
-    del sys.modules[spec.name]
+    """``benchmarks/gapfill_datasets.py`` as a module."""
+    with benchmark_module("gapfill_datasets") as module:
+        yield module
 
 
 def test_the_rest_pose_of_a_skeleton_that_is_no_preset(datasets):
