@@ -19,7 +19,6 @@ file without 3D points (force plates only) is refused.
 
 from __future__ import annotations
 
-import math
 import struct
 import warnings
 from dataclasses import dataclass
@@ -31,7 +30,12 @@ import numpy as np
 from handdb.clip import METERS_PER_UNIT, ClipSpec
 from handdb.errors import InputError
 from handdb.hand.skeletons import Skeleton
-from handdb.ingest.limits import MAX_FRAMES, checked_size, frame_limit_reason
+from handdb.ingest.limits import (
+    MAX_FRAMES,
+    check_recorded_rate,
+    checked_size,
+    frame_limit_reason,
+)
 from handdb.ingest.observations import Positions, resolve_names, single_file_rows
 from handdb.ingest.registry import MARKERS_KIND, InputFormat
 
@@ -55,9 +59,6 @@ BIG_ENDIAN_PROCESSOR = 86
 
 #: Units when a file has no ``POINT:UNITS`` (the C3D standard's default).
 DEFAULT_UNITS = "mm"
-
-#: Relative difference between ``POINT:RATE`` and the sidecar's fps taken as equal.
-RATE_TOLERANCE = 1e-3
 
 #: Everything the ``c3d`` package raises on a damaged file (it asserts on some checks,
 #: which ``python -O`` removes: the pre-checks here do not rely on them).
@@ -206,15 +207,6 @@ def _read_points(path: Path) -> _Points:
     return _Points(labels=labels, points=np.stack(frames), units=units, rate=rate)
 
 
-def _check_rate(rate: float, path: Path, spec: ClipSpec) -> None:
-    if not math.isfinite(rate) or rate <= 0:
-        raise InputError(path, f"POINT:RATE {rate:g} is not a frame rate", field="POINT:RATE")
-    if abs(rate - spec.fps) > RATE_TOLERANCE * rate:
-        raise InputError(spec.path, f"is {spec.fps:g}, but {path.name} records POINT:RATE "
-                         f"{rate:g} Hz; set \"fps\": {rate:g}", field="fps",
-                         clip_id=spec.clip_id)
-
-
 def read(path: str | Path, spec: ClipSpec, skeleton: Skeleton) -> Positions:
     """Read the labelled markers of a C3D file into long-form positions (clip units).
 
@@ -228,7 +220,8 @@ def read(path: str | Path, spec: ClipSpec, skeleton: Skeleton) -> Positions:
     """
     path = Path(path)
     points = _read_points(path)
-    _check_rate(points.rate, path, spec)
+    check_recorded_rate(points.rate, spec.fps, path, "POINT:RATE", sidecar=spec.path,
+                        clip_id=spec.clip_id)
     joints = resolve_names(points.labels, spec, skeleton, path,
                            lambda k: (None, LABELS_PARAMETER))
     known = np.flatnonzero(joints >= 0)

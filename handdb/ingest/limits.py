@@ -8,6 +8,7 @@ spans centimetres in any unit and at most a few thousand pixels in any image.
 
 from __future__ import annotations
 
+import math
 import os
 import stat
 from pathlib import Path
@@ -37,6 +38,9 @@ MAX_JSON_INTEGER_DIGITS = 30
 MAX_FPS = 10_000.0
 #: The lowest, frames per second: below it a track is not motion capture.
 MIN_FPS = 1.0
+#: Relative difference between a file's recorded frame rate and the sidecar's ``fps``
+#: taken as equal.
+RATE_TOLERANCE = 1e-3
 
 #: The range a bone length given in a sidecar may lie in, metres: finger bones are 1-10 cm,
 #: the whole hand about 20; an animated hand may be larger, a number outside this range is
@@ -166,6 +170,29 @@ def is_stray_run(before: int, after: int, n_filled: int) -> bool:
     """
     empty = after - before - 1
     return empty > STRAY_GAP_FRAMES and empty > n_filled
+
+
+def check_recorded_rate(rate: float, fps: float, path: Path, field: str, *,
+                        sidecar: Path | str, clip_id: str, line: int | None = None) -> None:
+    """Refuse a file whose recorded frame rate is not one or not the sidecar's ``fps``.
+
+    Parameters
+    ----------
+    rate
+        The rate the file records (C3D ``POINT:RATE``, QTM ``FREQUENCY``), Hz.
+    fps
+        The sidecar's ``fps``.
+    path, field, line
+        Where the file records it.
+    sidecar, clip_id
+        The sidecar blamed when the two differ (the file is the measurement).
+    """
+    if not math.isfinite(rate) or rate <= 0:
+        raise InputError(path, f"{field} {rate:g} is not a frame rate", line=line,
+                         field=field)
+    if abs(rate - fps) > RATE_TOLERANCE * rate:
+        raise InputError(sidecar, f"is {fps:g}, but {Path(path).name} records {field} "
+                         f"{rate:g} Hz; set \"fps\": {rate:g}", field="fps", clip_id=clip_id)
 
 
 def visible(name: str) -> bool:

@@ -29,7 +29,7 @@ from handdb.clip import METERS_PER_UNIT, ClipSpec
 from handdb.errors import InputError
 from handdb.hand.skeletons import Skeleton
 from handdb.ingest.delimited import DelimitedTable, TextLines, read_bytes, read_delimited
-from handdb.ingest.limits import MAX_FRAMES, frame_limit_reason, quoted
+from handdb.ingest.limits import MAX_FRAMES, check_recorded_rate, frame_limit_reason, quoted
 from handdb.ingest.observations import Positions, resolve_names, single_file_rows
 from handdb.ingest.registry import MARKERS_KIND, InputFormat
 
@@ -47,9 +47,6 @@ MISSING_CELLS = ("nan", "null", "")
 
 #: The columns before the coordinates in the column header.
 FRAME_COLUMNS = ("Frame", "Time")
-
-#: Relative difference between ``FREQUENCY`` and the sidecar's fps taken as equal.
-RATE_TOLERANCE = 1e-3
 
 #: A header key: upper-case letters, digits and underscores.
 HEADER_KEY = re.compile(r"[A-Z][A-Z0-9_]*")
@@ -189,10 +186,8 @@ def _check_frequency(path: Path, header: _Header, spec: ClipSpec) -> None:
     if not rate > 0 or not np.isfinite(rate):
         raise InputError(path, f"must be a frame rate in Hz, got {quoted(' '.join(cells))}",
                          line=line, field="FREQUENCY")
-    if abs(rate - spec.fps) > RATE_TOLERANCE * rate:
-        raise InputError(spec.path, f"is {spec.fps:g}, but {path.name} records FREQUENCY "
-                         f"{rate:g} Hz; set \"fps\": {rate:g}", field="fps",
-                         clip_id=spec.clip_id)
+    check_recorded_rate(rate, spec.fps, path, "FREQUENCY", line=line, sidecar=spec.path,
+                        clip_id=spec.clip_id)
 
 
 def read(path: str | Path, spec: ClipSpec, skeleton: Skeleton) -> Positions:
