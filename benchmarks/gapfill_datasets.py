@@ -31,6 +31,7 @@ ratio and whether it meets the 5x target (figures in ``RESULTS-gapfill.md``).
 from __future__ import annotations
 
 import argparse
+import sys
 import time
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
@@ -38,23 +39,26 @@ from pathlib import Path
 
 import numpy as np
 
-from handdb.gapfill import METHODS, THESIS, fill_gaps, method_names
-from handdb.gapfill.evaluate import RANDOM_GAPS_PER_FRAMES, RANDOM_MASK, THESIS_MASK
-from handdb.gapfill.masks import (
+REPO = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(REPO))
+
+from handdb.gapfill import METHODS, THESIS, fill_gaps, method_names  # noqa: E402
+from handdb.gapfill.evaluate import RANDOM_GAPS_PER_FRAMES, RANDOM_MASK, THESIS_MASK  # noqa: E402
+from handdb.gapfill.masks import (  # noqa: E402
     RANDOM_GAPS,
     THESIS_CLIP_FRAMES,
     random_gaps_mask,
     thesis_table_4_2_mask,
 )
-from handdb.hand.skeletons import Skeleton, load_skeleton
-from handdb.synthetic.clips import synthesize_clip
+from handdb.hand.skeletons import Skeleton, load_skeleton  # noqa: E402
+from handdb.synthetic.clips import synthesize_clip  # noqa: E402
+from tests.support import real_data  # noqa: E402
+from tests.support.paths import DHG_SAMPLE, REAL_TOOLS  # noqa: E402
 
-SHARED = Path(__file__).resolve().parents[1] / ".." / "shared" / "data"
-DHG = SHARED / "dhg-sample" / "skeletons_world.txt"
-MEDIAPIPE = SHARED / "real-tools" / "mediapipe" / "hand_landmarks.csv"
-GLOVE = SHARED / "real-tools" / "qualisys-glove" / "recording.tsv"
+DHG = DHG_SAMPLE
+MEDIAPIPE = REAL_TOOLS / "mediapipe" / "hand_landmarks.csv"
+GLOVE = REAL_TOOLS / "qualisys-glove" / "recording.tsv"
 
-MM_PER_M = 1000.0
 #: Pinhole focal length (pixels) and image centre of the projections of 3D captures.
 FOCAL_PX = 500.0
 CENTRE_PX = (960.0, 540.0)
@@ -141,8 +145,8 @@ def dhg_cases() -> list[Case]:
     """The DHG sample, orthographic and pinhole (empty when the data is absent)."""
     if not DHG.is_file():
         return []
-    xyz = np.loadtxt(DHG).reshape(-1, 22, 3) * MM_PER_M
-    skeleton = load_skeleton("dhg22")
+    capture = real_data.load_dhg(DHG)
+    xyz, skeleton = capture.xyz, load_skeleton(capture.skeleton)
     return [Case("dhg", "orthographic", "dhg", xyz[..., :2].copy(), skeleton, False),
             Case("dhg", "pinhole", "dhg", _pinhole(xyz), skeleton, False)]
 
