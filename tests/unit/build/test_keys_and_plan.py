@@ -90,14 +90,25 @@ def test_an_edited_file_redoes_its_clip_from_ingest(built):
     assert {c.clip_id: c.start for c in plan.todo} == {"bravo": "ingest"}
 
 
-def test_nothing_to_do_never_starts_prefect(built):
-    inbox, db = built
+def thread_build_in_a_fresh_process(inbox: Path, db: str) -> tuple[dict, bool]:
+    """Build with the Prefect thread runner in a new interpreter (USD export off).
+
+    Returns the summary's clip counts and whether Prefect was imported.
+    """
     code = ("import sys; from handdb.build import BuildOptions, run_build; "
             "s = run_build(sys.argv[1], sys.argv[2], BuildOptions(export_usd=False), "
-            "runner='thread'); print(len(s.unchanged), 'prefect' in sys.modules)")
+            "runner='thread'); "
+            "print(s.n_clips, len(s.unchanged), len(s.processed), 'prefect' in sys.modules)")
     out = subprocess.run([sys.executable, "-c", code, str(inbox), db], capture_output=True,
-                         text=True, check=True).stdout
-    assert out.split() == ["3", "False"]
+                         text=True, check=True).stdout.split()
+    counts = dict(zip(("clips", "unchanged", "processed"), map(int, out[:3]), strict=True))
+    return counts, out[3] == "True"
+
+
+def test_nothing_to_do_never_starts_prefect(built):
+    inbox, db = built
+    counts, prefect = thread_build_in_a_fresh_process(inbox, db)
+    assert counts["unchanged"] == 3 and not prefect
 
 
 def test_an_empty_inbox_builds_without_prefect_and_stores_the_xray_tables(tmp_path):
@@ -105,12 +116,8 @@ def test_an_empty_inbox_builds_without_prefect_and_stores_the_xray_tables(tmp_pa
     inbox.mkdir()
     shutil.copyfile(str(files("handdb") / "data" / "chaudhry_table1.xray.csv"),
                     inbox / "chaudhry_table1.xray.csv")
-    code = ("import sys; from handdb.build import run_build; "
-            "s = run_build(sys.argv[1], sys.argv[2], runner='thread'); "
-            "print(s.n_clips, 'prefect' in sys.modules)")
-    out = subprocess.run([sys.executable, "-c", code, str(inbox), db], capture_output=True,
-                         text=True, check=True).stdout
-    assert out.split() == ["0", "False"]
+    counts, prefect = thread_build_in_a_fresh_process(inbox, db)
+    assert counts["clips"] == 0 and not prefect
     assert query(db, "SELECT count(*) AS n FROM xray_measurements").column("n")[0].as_py() > 0
     assert query(db, "SELECT count(*) AS n FROM runs").column("n")[0].as_py() == 1
 
