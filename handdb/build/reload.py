@@ -99,7 +99,7 @@ def resume(store: Store, entry: ClipEntry, content_hash: str, keys: dict[str, st
     verdict = (Verdict(reasons=tuple(row["flag_reasons"]),
                        rows=joints.column("flagged").to_numpy(zero_copy_only=False).reshape(
                            clip.observed.shape))
-               if "validate" in done else None)
+               if "validate" in done and joints is not None else None)
     return ClipResult(
         clip=clip, keys=keys,
         bones=stored_bone_lengths(store, clip) if "lengths" in done else None,

@@ -323,7 +323,7 @@ def check_placeable(missing: np.ndarray, skeleton: Skeleton, never_seen: np.ndar
         If ``never_seen`` is not empty and some frame observes no point; the message names
         the joints and the first runs of empty frames.
     """
-    empty = missing.all(axis=1)
+    empty = np.asarray(missing.all(axis=1))
     if not never_seen.size or not empty.any():
         return
     runs = find_gaps(empty[:, None])

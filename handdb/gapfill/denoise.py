@@ -133,7 +133,7 @@ def denoise(uv: np.ndarray, missing: np.ndarray) -> tuple[np.ndarray, int]:
     if sigma < MIN_NOISE_PX:
         return uv, 0
     variance = sigma * sigma
-    stride = max(np.count_nonzero(~missing) // RISK_SAMPLES, 1)
+    stride = max(int(np.count_nonzero(~missing)) // RISK_SAMPLES, 1)
     best_half, best_risk = 0, 0.0
     for half in SMOOTHING_HALF_WIDTHS:
         change, trace, count = _smooth_runs(uv, missing, smoothing_weights(half), uv, stride,

@@ -82,7 +82,7 @@ def _frame_numbers(ids: list[str], path: Path, capture: str, spec: ClipSpec) -> 
                              field=f"{capture}.{frame_id}")
     numbers = np.array([int(i) for i in ids], dtype=np.int64)
     offset = spec.frame_offset
-    shifted = numbers - (numbers.min() if offset == FIRST_FRAME else offset or 0)
+    shifted = numbers - (numbers.min() if offset == FIRST_FRAME else int(offset or 0))
     sidecar = Path(spec.path).name
     if (shifted < 0).any():
         bad = ids[int(np.argmin(shifted))]

@@ -122,11 +122,12 @@ def _frame_of(entry: dict, path: Path, where: str, spec: ClipSpec) -> int:
         frame = round(stamp * spec.fps / MS_PER_SECOND)
         field = f"{where}.timestamp_ms"
     else:
-        frame = entry.get("frame")
+        given = entry.get("frame")
         field = f"{where}.frame"
-        if isinstance(frame, bool) or not isinstance(frame, int) or frame < 0:
-            raise InputError(path, f"must be a whole number from 0, got {preview(frame)}",
+        if isinstance(given, bool) or not isinstance(given, int) or given < 0:
+            raise InputError(path, f"must be a whole number from 0, got {preview(given)}",
                              field=field)
+        frame = given
     if frame < 0:
         raise InputError(path, "must not be negative", field=field)
     if frame >= MAX_FRAMES:

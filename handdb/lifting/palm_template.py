@@ -484,7 +484,7 @@ def fit_template(points: np.ndarray, start: np.ndarray, parents: np.ndarray,
         first, _ = _alternate(points, centred, template, parents, lengths)
         second, first_fit = _alternate(points, centred, first, parents, lengths)
         r, v = first - template, second - 2.0 * first + template
-        alpha = -np.linalg.norm(r) / max(float(np.linalg.norm(v)), np.finfo(float).tiny)
+        alpha = -float(np.linalg.norm(r)) / max(float(np.linalg.norm(v)), np.finfo(float).tiny)
         alpha = min(alpha, -1.0)
         leap = template - 2.0 * alpha * r + alpha**2 * v
         leap = on_bone_spheres(leap - leap[0], parents, lengths)

@@ -21,8 +21,8 @@ class LiftMethod(Protocol):
     """Signature every lifting method implements (see :func:`lift`)."""
 
     def __call__(self, uv: np.ndarray, skeleton: Skeleton, bone_lengths: np.ndarray,
-                 camera: Camera, *, hand: str, **params: Any) -> LiftResult:
-        """Lift ``uv`` to 3D; see :func:`lift`."""
+                 camera: Camera, *, hand: str) -> LiftResult:
+        """Lift ``uv`` to 3D; see :func:`lift` (a method may take parameters of its own)."""
 
 
 #: Every lifting method by name, filled in :mod:`handdb.lifting`.

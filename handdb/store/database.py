@@ -31,6 +31,7 @@ import hashlib
 import json
 import os
 import socket
+import sys
 import uuid
 from collections.abc import Iterator
 from dataclasses import dataclass
@@ -84,7 +85,7 @@ def _sized(payload: bytes) -> tuple[int, str]:
 
 def _try_lock(fh) -> bool:
     """Take an exclusive OS lock on the open file ``fh`` without waiting; ``False`` if held."""
-    if os.name == "nt":
+    if sys.platform == "win32":
         import msvcrt
 
         try:
@@ -104,7 +105,7 @@ def _try_lock(fh) -> bool:
 
 def _unlock(fh) -> None:
     """Release the lock :func:`_try_lock` took."""
-    if os.name == "nt":
+    if sys.platform == "win32":
         import msvcrt
 
         fh.seek(_WINDOWS_LOCK_SPAN)
