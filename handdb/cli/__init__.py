@@ -31,6 +31,8 @@ LAZY_COMMANDS: dict[str, tuple[str, str, str]] = {
     "gapfill-eval": ("handdb.cli.gapfill", "gapfill_eval",
                      "Hide known points of full tracks, fill them with every method, print "
                      "the RMSE."),
+    "export": ("handdb.cli.export", "export_clips",
+               "Export clips, one file per clip, as USD, BVH, glTF, FBX, TRC or C3D."),
     "export-usd": ("handdb.cli.export", "export_usd",
                    "Export a clip as a UsdSkel animation with a skinned hand mesh."),
     "export-bvh": ("handdb.cli.export", "export_bvh",

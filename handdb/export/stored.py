@@ -1,27 +1,25 @@
-"""Export a clip stored in the database as USD or BVH.
+"""Export clips stored in the database, one file per clip, in any export format.
 
-Reads the clip's ``clips`` row, its ``joints_3d`` and its ``bone_lengths`` from the
-database (:class:`handdb.store.database.Store`) and hands them to :mod:`handdb.export.usd` or
-:mod:`handdb.export.bvh`, chosen by the output file's suffix.
+Reads a clip's ``clips`` row, its ``joints_3d`` and its ``bone_lengths`` from the
+database (:class:`handdb.store.database.Store`) and hands them to the writer of an export
+format of :data:`handdb.export.formats.FORMATS`: chosen by the output file's suffix for one
+clip (:func:`export_stored_clip`), by name for many (:func:`export_stored_clips`). The
+writers here adapt a :class:`StoredMotion` to each format's module, imported only when a
+file of that format is written.
 """
 
 from __future__ import annotations
 
+from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
-from handdb.errors import ParameterError, StoreError
-from handdb.export.bvh import export_clip_bvh
-from handdb.export.usd import LAYER_SUFFIXES, USDZ_SUFFIX, export_clip_usd
+from handdb.errors import StoreError
+from handdb.export.formats import FORMATS, ExportFormat, ExportOptions, format_for_suffix
 from handdb.hand.skeletons import Skeleton, bone_length_array, load_skeleton
 from handdb.store.database import Store
-
-BVH_SUFFIX = ".bvh"
-
-#: Output suffixes :func:`export_stored_clip` can write.
-EXPORT_SUFFIXES: tuple[str, ...] = (*LAYER_SUFFIXES, USDZ_SUFFIX, BVH_SUFFIX)
 
 
 @dataclass(frozen=True)
@@ -46,6 +44,11 @@ class StoredMotion:
     fps: float
     xyz: np.ndarray
     bone_lengths: np.ndarray
+
+    @property
+    def unplaced_frames(self) -> int:
+        """Frames with a joint that has no 3D position (a posed format cannot take them)."""
+        return int((~np.isfinite(self.xyz).all(axis=(1, 2))).sum())
 
 
 def _read(store: Store, table: str, clip_id: str):
@@ -82,10 +85,50 @@ def read_stored_motion(db: str, clip_id: str) -> StoredMotion:
                         units=clip["units"], fps=clip["fps"], xyz=xyz, bone_lengths=lengths)
 
 
+def write_usd(motion: StoredMotion, path: Path, options: ExportOptions) -> Path:
+    """Write ``motion`` as UsdSkel (:mod:`handdb.export.usd`); reads ``keep_lengths``."""
+    from handdb.export.usd import export_clip_usd
+
+    return export_clip_usd(path, clip_id=motion.clip_id, skeleton=motion.skeleton,
+                           xyz=motion.xyz, bone_lengths=motion.bone_lengths, fps=motion.fps,
+                           units=motion.units, hand=motion.hand,
+                           keep_lengths=options.keep_lengths)
+
+
+def write_bvh(motion: StoredMotion, path: Path, options: ExportOptions) -> Path:
+    """Write ``motion`` as BVH (:mod:`handdb.export.bvh`); bones always keep their lengths."""
+    from handdb.export.bvh import export_clip_bvh
+
+    return export_clip_bvh(path, skeleton=motion.skeleton, xyz=motion.xyz,
+                           bone_lengths=motion.bone_lengths, fps=motion.fps)
+
+
+def write_trc(motion: StoredMotion, path: Path, options: ExportOptions) -> Path:
+    """Write ``motion``'s joint positions as TRC (:mod:`handdb.export.trc`)."""
+    from handdb.export.trc import export_clip_trc
+
+    return export_clip_trc(path, skeleton=motion.skeleton, xyz=motion.xyz, fps=motion.fps,
+                           units=motion.units)
+
+
+def write_c3d(motion: StoredMotion, path: Path, options: ExportOptions) -> Path:
+    """Write ``motion``'s joint positions as C3D (:mod:`handdb.export.c3d`)."""
+    from handdb.export.c3d import export_clip_c3d
+
+    return export_clip_c3d(path, skeleton=motion.skeleton, xyz=motion.xyz, fps=motion.fps,
+                           units=motion.units)
+
+
+def _write(entry: ExportFormat, motion: StoredMotion, out: Path,
+           options: ExportOptions) -> Path:
+    out.parent.mkdir(parents=True, exist_ok=True)
+    return entry.load()(motion, out, options)
+
+
 def export_stored_clip(
     db: str, clip_id: str, out: str | Path, *, keep_lengths: bool = False
 ) -> Path:
-    """Export the stored clip ``clip_id`` to ``out`` (USD or BVH, by suffix).
+    """Export the stored clip ``clip_id`` to ``out``, in the format its suffix names.
 
     Parameters
     ----------
@@ -94,24 +137,107 @@ def export_stored_clip(
     clip_id
         The clip to export.
     out
-        Output file, one of :data:`EXPORT_SUFFIXES`; its folder is created if missing.
+        Output file, with a suffix of a format of :data:`~handdb.export.formats.FORMATS`;
+        its folder is created if missing.
     keep_lengths
-        USD only: give every bone its stored length instead of reproducing ``joints_3d``
-        exactly (BVH bones always keep their lengths).
+        Posed formats: give every bone its stored length instead of reproducing
+        ``joints_3d`` exactly (BVH bones always keep their lengths).
 
     Returns
     -------
     pathlib.Path
         ``out``.
+
+    Raises
+    ------
+    ParameterError
+        If no format writes the suffix of ``out``.
+    StoreError
+        If the clip is not in the database.
     """
     out = Path(out)
-    if out.suffix not in EXPORT_SUFFIXES:
-        raise ParameterError(f"{out}: the suffix must be one of {EXPORT_SUFFIXES}")
-    motion = read_stored_motion(db, clip_id)
-    out.parent.mkdir(parents=True, exist_ok=True)
-    if out.suffix == BVH_SUFFIX:
-        return export_clip_bvh(out, skeleton=motion.skeleton, xyz=motion.xyz,
-                               bone_lengths=motion.bone_lengths, fps=motion.fps)
-    return export_clip_usd(out, clip_id=clip_id, skeleton=motion.skeleton, xyz=motion.xyz,
-                           bone_lengths=motion.bone_lengths, fps=motion.fps,
-                           units=motion.units, hand=motion.hand, keep_lengths=keep_lengths)
+    entry = format_for_suffix(out)
+    return _write(entry, read_stored_motion(db, clip_id), out,
+                  ExportOptions(keep_lengths=keep_lengths))
+
+
+@dataclass(frozen=True)
+class ClipExport:
+    """What :func:`export_stored_clips` did with one clip.
+
+    Attributes
+    ----------
+    clip_id
+        The clip.
+    path
+        The file written, or ``None`` when the clip was skipped.
+    skipped
+        Why the clip was skipped, in words; ``None`` when it was written.
+    """
+
+    clip_id: str
+    path: Path | None
+    skipped: str | None = None
+
+
+def export_stored_clips(
+    db: str, format_name: str, out_dir: str | Path, clip_ids: list[str] | None = None,
+    options: ExportOptions | None = None,
+) -> Iterator[ClipExport]:
+    """Export stored clips, one file per clip, ``<out_dir>/<clip_id><suffix>``.
+
+    A clip a posed format cannot take (frames with joints gap filling could not place) is
+    skipped with the reason, and so is a clip whose motion is not in the database; every
+    other clip is written.
+
+    Parameters
+    ----------
+    db
+        Database folder or fsspec URL.
+    format_name
+        A format of :data:`~handdb.export.formats.FORMATS`.
+    out_dir
+        Output folder, created if missing.
+    clip_ids
+        The clips to export, in this order; ``None``: every clip of the database.
+    options
+        Passed to the format's writer; ``None``: the defaults of :class:`ExportOptions`.
+
+    Yields
+    ------
+    ClipExport
+        One per clip, as it is written or skipped.
+
+    Raises
+    ------
+    UnknownNameError
+        If ``format_name`` is not a format; the message lists those that are (raised before
+        anything is read).
+    StoreError
+        If a clip of ``clip_ids`` is not in the database (before anything is written).
+    """
+    entry = FORMATS[format_name]
+    store = Store(db)
+    stored = store.partition_keys("clips")
+    if clip_ids is None:
+        clip_ids = stored
+    unknown = [clip_id for clip_id in clip_ids if clip_id not in stored]
+    if unknown:
+        raise StoreError(f"database {store.url} has no clip {', '.join(map(repr, unknown))}; "
+                         "the clips are listed by handdb sql 'SELECT clip_id FROM clips'")
+    out_dir = Path(out_dir)
+    options = options or ExportOptions()
+    for clip_id in clip_ids:
+        try:
+            motion = read_stored_motion(db, clip_id)
+        except StoreError as exc:
+            yield ClipExport(clip_id, None, str(exc))
+            continue
+        if entry.posed and motion.unplaced_frames:
+            yield ClipExport(clip_id, None, (
+                f"{motion.unplaced_frames} of {len(motion.xyz)} frames have joints gap "
+                f"filling could not place, and {entry.name} needs every joint posed; "
+                "TRC and C3D write them as missing"))
+            continue
+        yield ClipExport(clip_id, _write(entry, motion, out_dir / f"{clip_id}{entry.suffix}",
+                                         options))

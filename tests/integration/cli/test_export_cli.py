@@ -35,23 +35,23 @@ def table_with(name, columns):
     return tables.from_columns(name, filled)
 
 
-def write_database(folder, motion):
-    """A database holding ``motion`` as clip :data:`CLIP_ID`; return its location."""
+def write_database(folder, motion, clip_id=CLIP_ID):
+    """A database holding ``motion`` as clip ``clip_id``; return its location."""
     skeleton = motion.skeleton
     T, J = motion.xyz.shape[:2]
     store = Store(str(folder))
-    store.write("clips", CLIP_ID, table_with("clips", {
-        "clip_id": [CLIP_ID], "skeleton": ["mediapipe21"], "hand": ["left"], "fps": [60.0],
+    store.write("clips", clip_id, table_with("clips", {
+        "clip_id": [clip_id], "skeleton": [skeleton.name], "hand": ["left"], "fps": [60.0],
         "units": ["mm"], "n_frames": [T], "n_joints": [J]}))
     frame, joint = np.meshgrid(np.arange(T), np.arange(J), indexing="ij")
-    store.write("joints_3d", CLIP_ID, table_with("joints_3d", {
-        "clip_id": [CLIP_ID] * (T * J), "frame": frame.ravel(), "joint_index": joint.ravel(),
+    store.write("joints_3d", clip_id, table_with("joints_3d", {
+        "clip_id": [clip_id] * (T * J), "frame": frame.ravel(), "joint_index": joint.ravel(),
         "joint": [skeleton.joints[j] for j in joint.ravel()],
         "x": motion.xyz[..., 0].ravel(), "y": motion.xyz[..., 1].ravel(),
         "z": motion.xyz[..., 2].ravel()}))
     bones = list(skeleton.bone_names)
-    store.write("bone_lengths", CLIP_ID, table_with("bone_lengths", {
-        "clip_id": [CLIP_ID] * len(bones), "bone": bones,
+    store.write("bone_lengths", clip_id, table_with("bone_lengths", {
+        "clip_id": [clip_id] * len(bones), "bone": bones,
         "length": [motion.bone_lengths[skeleton.index(b)] for b in bones]}))
     return store.url
 

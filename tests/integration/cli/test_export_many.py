@@ -1,0 +1,128 @@
+"""``handdb export``: many clips at once, in any format, run as a user runs it."""
+
+import time
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+from typer.testing import CliRunner
+
+from handdb.cli import app
+from handdb.export import FORMATS
+from handdb.export.bvh import depth_first_order
+from handdb.export.rotations import CAMERA_TO_Y_UP
+from handdb.hand.skeletons import frame_bone_lengths, load_skeleton
+from tests.integration.cli.test_export_cli import write_database
+from tests.support.motions import make_hinge_motion
+from tests.unit.export.test_bvh import parse_bvh
+from tests.unit.export.test_c3d_export import FLOAT32_MM, read_with_c3d_package
+from tests.unit.export.test_trc import read_trc
+
+runner = CliRunner()
+
+#: Clips of the synthetic database; ``gappy`` has frames without every joint.
+COMPLETE = ("alpha", "bravo")
+GAPPY = "gappy"
+
+
+@pytest.fixture(scope="module")
+def database(tmp_path_factory):
+    folder = tmp_path_factory.mktemp("many") / "db"
+    skeleton = load_skeleton("mediapipe21")
+    motions = {}
+    for seed, clip_id in enumerate((*COMPLETE, GAPPY)):
+        motion = make_hinge_motion(skeleton, n_frames=12, seed=seed)
+        if clip_id == GAPPY:
+            motion.xyz[4:6, skeleton.index("ring_tip")] = np.nan
+        db = write_database(folder, motion, clip_id=clip_id)
+        motions[clip_id] = motion.xyz
+    return db, motions
+
+
+def export(*args):
+    return runner.invoke(app, ["export", *map(str, args)])
+
+
+def test_every_clip_is_written_when_none_is_named(database, tmp_path):
+    db, motions = database
+    result = export("--db", db, "--format", "trc", "--out", tmp_path / "trc")
+    assert result.exit_code == 0, result.output
+    written = sorted(tmp_path.joinpath("trc").iterdir())
+    assert [p.name for p in written] == ["alpha.trc", "bravo.trc", "gappy.trc"]
+    assert result.stdout.split() == [str(p) for p in written]
+    gappy = read_trc(tmp_path / "trc" / "gappy.trc")["xyz"]
+    np.testing.assert_array_equal(np.isnan(gappy), np.isnan(motions[GAPPY]))
+
+
+def test_a_posed_format_skips_the_clip_with_unplaced_joints(database, tmp_path):
+    db, _ = database
+    result = export("--db", db, "--format", "bvh", "--out", tmp_path / "bvh")
+    assert result.exit_code == 3, result.output
+    assert sorted(p.name for p in (tmp_path / "bvh").iterdir()) == ["alpha.bvh", "bravo.bvh"]
+    assert ("skipped gappy: 2 of 12 frames have joints gap filling could not place, and bvh "
+            "needs every joint posed") in result.stderr
+
+
+def test_named_clips_only_and_in_their_order(database, tmp_path):
+    db, motions = database
+    result = export("--db", db, "--format", "c3d", "--out", tmp_path, "bravo", "gappy")
+    assert result.exit_code == 0, result.output
+    assert result.stdout.split() == [str(tmp_path / "bravo.c3d"), str(tmp_path / "gappy.c3d")]
+    xyz = read_with_c3d_package(tmp_path / "bravo.c3d")["xyz"]
+    expected = CAMERA_TO_Y_UP.apply(motions["bravo"].reshape(-1, 3)).reshape(xyz.shape)
+    np.testing.assert_allclose(xyz, expected, rtol=0, atol=FLOAT32_MM)
+
+
+def test_an_unknown_clip_writes_nothing(database, tmp_path):
+    db, _ = database
+    result = export("--db", db, "--format", "trc", "--out", tmp_path / "out", "alpha", "nope")
+    assert result.exit_code == 1
+    assert "has no clip 'nope'" in result.stderr
+    assert not (tmp_path / "out").exists()
+
+
+def test_an_unknown_format_lists_the_choices(database, tmp_path):
+    db, _ = database
+    result = export("--db", db, "--format", "obj", "--out", tmp_path / "out")
+    assert result.exit_code == 2
+    message = " ".join(result.stderr.replace("│", " ").split())
+    assert f"unknown export format 'obj'; known: {', '.join(FORMATS.names())}" in message
+    assert not (tmp_path / "out").exists()
+
+
+@pytest.fixture(scope="module")
+def dhg_database(dhg_mm, tmp_path_factory):
+    """The real DHG capture stored as a clip, its bones their median measured lengths."""
+    skeleton = load_skeleton("dhg22")
+    child = skeleton.bones[:, 1]
+    lengths = np.zeros(skeleton.n_joints)
+    lengths[child] = np.median(frame_bone_lengths(dhg_mm, skeleton)[:, child], axis=0)
+    motion = SimpleNamespace(skeleton=skeleton, xyz=dhg_mm, bone_lengths=lengths)
+    return write_database(tmp_path_factory.mktemp("dhg") / "db", motion, clip_id="dhg")
+
+
+@pytest.mark.parametrize("name", ["trc", "c3d", "bvh", "usd"])
+def test_real_capture_exports_in_every_format(dhg_database, dhg_mm, tmp_path, name):
+    started = time.perf_counter()
+    result = export("--db", dhg_database, "--format", name, "--out", tmp_path)
+    seconds = time.perf_counter() - started
+    assert result.exit_code == 0, result.output
+    path = tmp_path / f"dhg{FORMATS[name].suffix}"
+    assert result.stdout.split() == [str(path)]
+    assert seconds < 10.0
+    expected = CAMERA_TO_Y_UP.apply(dhg_mm.reshape(-1, 3)).reshape(dhg_mm.shape)
+    if name == "trc":
+        trc = read_trc(path)
+        assert (trc["fields"]["NumFrames"], trc["fields"]["DataRate"]) == ("95", "60")
+        np.testing.assert_allclose(trc["xyz"], expected, atol=1e-6)
+    elif name == "c3d":
+        np.testing.assert_allclose(read_with_c3d_package(path)["xyz"], expected, rtol=0,
+                                   atol=FLOAT32_MM)
+    elif name == "bvh":
+        skeleton = load_skeleton("dhg22")
+        joints, _, values = parse_bvh(path.read_text())
+        assert len(values) == 95
+        assert [j["name"] for j in joints if j["name"]] == [
+            skeleton.joints[j] for j in depth_first_order(skeleton)]
+    else:
+        assert path.stat().st_size > 0
