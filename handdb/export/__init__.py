@@ -26,6 +26,10 @@ for _entry in (
     ExportFormat("bvh", (".bvh",), "handdb.export.stored:write_bvh",
                  "Biovision Hierarchy: rigid bones, Euler rotation channels",
                  "Blender, MotionBuilder, Maya, Unity and Unreal importers", posed=True),
+    ExportFormat("glb", (".glb",), "handdb.export.stored:write_glb",
+                 "glTF 2.0 binary: skinned hand mesh, joint nodes, one animation (metres)",
+                 "Blender, three.js / Babylon.js viewers, Unity (glTFast), Godot, Windows 3D "
+                 "Viewer", posed=True),
     ExportFormat("trc", (".trc",), "handdb.export.stored:write_trc",
                  "marker trajectories: every joint's 3D position per frame, tab-separated",
                  "OpenSim, Pose2Sim, Mokka, pandas", posed=False),

@@ -103,6 +103,16 @@ def write_bvh(motion: StoredMotion, path: Path, options: ExportOptions) -> Path:
                            bone_lengths=motion.bone_lengths, fps=motion.fps)
 
 
+def write_glb(motion: StoredMotion, path: Path, options: ExportOptions) -> Path:
+    """Write ``motion`` as skinned glTF (:mod:`handdb.export.gltf`); reads ``keep_lengths``."""
+    from handdb.export.gltf import export_clip_gltf
+
+    return export_clip_gltf(path, clip_id=motion.clip_id, skeleton=motion.skeleton,
+                            xyz=motion.xyz, bone_lengths=motion.bone_lengths, fps=motion.fps,
+                            units=motion.units, hand=motion.hand,
+                            keep_lengths=options.keep_lengths)
+
+
 def write_trc(motion: StoredMotion, path: Path, options: ExportOptions) -> Path:
     """Write ``motion``'s joint positions as TRC (:mod:`handdb.export.trc`)."""
     from handdb.export.trc import export_clip_trc
