@@ -145,3 +145,7 @@ class BoneLengthError(HanddbError):
 
 class StageError(HanddbError):
     """A pipeline stage could not process a clip (the message says why)."""
+
+
+class MissingToolError(HanddbError):
+    """An external program a command needs (Blender for FBX) is not installed."""

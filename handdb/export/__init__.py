@@ -30,6 +30,9 @@ for _entry in (
                  "glTF 2.0 binary: skinned hand mesh, joint nodes, one animation (metres)",
                  "Blender, three.js / Babylon.js viewers, Unity (glTFast), Godot, Windows 3D "
                  "Viewer", posed=True),
+    ExportFormat("fbx", (".fbx",), "handdb.export.stored:write_fbx",
+                 "FBX binary, converted from the glTF by Blender (needs Blender installed)",
+                 "Maya, MotionBuilder, 3ds Max, Unity, Unreal Engine, Blender", posed=True),
     ExportFormat("trc", (".trc",), "handdb.export.stored:write_trc",
                  "marker trajectories: every joint's 3D position per frame, tab-separated",
                  "OpenSim, Pose2Sim, Mokka, pandas", posed=False),

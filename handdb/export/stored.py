@@ -113,6 +113,15 @@ def write_glb(motion: StoredMotion, path: Path, options: ExportOptions) -> Path:
                             keep_lengths=options.keep_lengths)
 
 
+def write_fbx(motion: StoredMotion, path: Path, options: ExportOptions) -> Path:
+    """Write ``motion`` as FBX through Blender (:mod:`handdb.export.fbx`); rigid bones."""
+    from handdb.export.fbx import export_clip_fbx
+
+    return export_clip_fbx(path, clip_id=motion.clip_id, skeleton=motion.skeleton,
+                           xyz=motion.xyz, bone_lengths=motion.bone_lengths, fps=motion.fps,
+                           units=motion.units, hand=motion.hand)
+
+
 def write_trc(motion: StoredMotion, path: Path, options: ExportOptions) -> Path:
     """Write ``motion``'s joint positions as TRC (:mod:`handdb.export.trc`)."""
     from handdb.export.trc import export_clip_trc

@@ -1,19 +1,29 @@
-"""Import a USD file into Blender (bpy) and describe what Blender made of it, as JSON.
+"""Import a USD, glTF or FBX file into Blender (bpy); describe what Blender made of it, as JSON.
 
-Run with Blender's Python: ``python blender_import.py CLIP.usd FRAME [FRAME ...]``. Prints
-one JSON object: the armature's bone names, the frame range of its action, and the world
-position of every bone's head at each FRAME (Blender units, Blender's Z-up world).
+Run with Blender's Python: ``python blender_import.py CLIP FRAME [FRAME ...] [--fps FPS]``
+(CLIP a ``.usd*``, ``.glb`` or ``.fbx`` file; FBX keys are imported from frame 0, not
+Blender's default 1). Prints one JSON object: the armature's bone names, the
+frame range of its action, and the world position of every bone's head at each FRAME
+(Blender units, Blender's Z-up world). glTF keys its animation in seconds and Blender's
+importer converts them to frames at the scene's rate: ``--fps`` sets that rate first.
 """
 
+import argparse
 import json
-import sys
 
 import bpy
 
 
-def main(path: str, frames: list[int]) -> dict:
+def main(path: str, frames: list[int], fps: float | None = None) -> dict:
     bpy.ops.wm.read_factory_settings(use_empty=True)
-    bpy.ops.wm.usd_import(filepath=path)
+    if fps is not None:
+        bpy.context.scene.render.fps, bpy.context.scene.render.fps_base = round(fps), 1.0
+    if path.endswith(".glb"):
+        bpy.ops.import_scene.gltf(filepath=path)
+    elif path.endswith(".fbx"):
+        bpy.ops.import_scene.fbx(filepath=path, anim_offset=0.0)
+    else:
+        bpy.ops.wm.usd_import(filepath=path)
     armatures = [o for o in bpy.data.objects if o.type == "ARMATURE"]
     meshes = [o for o in bpy.data.objects if o.type == "MESH"]
     armature = armatures[0]
@@ -26,6 +36,7 @@ def main(path: str, frames: list[int]) -> dict:
     return {
         "armatures": len(armatures),
         "bones": [bone.name for bone in armature.data.bones],
+        "action": action.name if action else None,
         "action_frame_range": list(action.frame_range) if action else None,
         "scene_frame_range": [bpy.context.scene.frame_start, bpy.context.scene.frame_end],
         "fps": bpy.context.scene.render.fps / bpy.context.scene.render.fps_base,
@@ -37,4 +48,9 @@ def main(path: str, frames: list[int]) -> dict:
 
 
 if __name__ == "__main__":
-    print(json.dumps(main(sys.argv[1], [int(f) for f in sys.argv[2:]])))
+    parser = argparse.ArgumentParser()
+    parser.add_argument("path")
+    parser.add_argument("frames", type=int, nargs="+")
+    parser.add_argument("--fps", type=float)
+    arguments = parser.parse_args()
+    print(json.dumps(main(arguments.path, arguments.frames, arguments.fps)))

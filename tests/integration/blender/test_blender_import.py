@@ -1,4 +1,4 @@
-"""Blender (bpy 4.5, in its own venv ``.venv-blender``) imports the exported USD."""
+"""Blender (bpy 4.5, in its own venv ``.venv-blender``) imports the exported USD and glTF."""
 
 import json
 import subprocess
@@ -10,7 +10,9 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 from handdb.clip import METERS_PER_UNIT
-from handdb.export.rotations import CAMERA_TO_Y_UP
+from handdb.export.fbx import BLENDER_VARIABLE, export_clip_fbx
+from handdb.export.gltf import export_clip_gltf
+from handdb.export.rotations import CAMERA_TO_Y_UP, joint_rotations, motion_positions
 from handdb.export.usd import export_clip_usd
 from handdb.hand.skeletons import load_skeleton
 from tests.support.motions import make_hinge_motion
@@ -56,3 +58,39 @@ def test_blender_imports_an_animated_armature(tmp_path, suffix, noise_mm):
         heads = np.array([report["heads"][str(frame)][joint] for joint in motion.skeleton.joints])
         expected = METERS_PER_UNIT[units] * to_blender.apply(motion.xyz[frame])
         assert np.abs(heads - expected).max() < tolerance
+
+
+@pytest.mark.parametrize("suffix", [".glb", ".fbx"])
+def test_blender_imports_the_gltf_and_fbx_armature_and_animation(tmp_path, monkeypatch,
+                                                                 suffix):
+    monkeypatch.setenv(BLENDER_VARIABLE, str(BLENDER_PYTHON))
+    hinge = make_hinge_motion(load_skeleton("mediapipe21"), n_frames=40, seed=11)
+    motion = replace(hinge, fps=60.0, xyz=hinge.xyz + np.random.default_rng(3).normal(
+        scale=2.0, size=hinge.xyz.shape))
+    export = export_clip_gltf if suffix == ".glb" else export_clip_fbx
+    path = export(tmp_path / f"clip{suffix}", clip_id="clip-01", skeleton=motion.skeleton,
+                  xyz=motion.xyz, bone_lengths=motion.bone_lengths, fps=motion.fps,
+                  units="mm", hand="right")
+    frames = [0, 17, len(motion.xyz) - 1]
+    run = subprocess.run([str(BLENDER_PYTHON), str(IMPORT_SCRIPT), str(path), *map(str, frames),
+                          "--fps", str(motion.fps)],
+                         capture_output=True, text=True, timeout=300, check=False)
+    assert run.returncode == 0, run.stderr[-2000:]
+    report = json.loads(run.stdout.strip().splitlines()[-1])
+
+    assert report["armatures"] == 1
+    assert sorted(report["bones"]) == sorted(motion.skeleton.joints)
+    assert report["action_frame_range"] == [0, len(motion.xyz) - 1]
+    assert report["action"] == ("clip-01" if suffix == ".glb" else "RightHand|clip-01")
+    skinned = [m for m in report["meshes"] if m["armature_modifier"]]
+    assert [m["name"] for m in skinned] == ["RightHandMesh"]
+
+    # glTF and FBX are Y-up in metres (FBX in cm, scaled back); Blender turns them Z-up.
+    to_blender = Y_UP_TO_BLENDER * CAMERA_TO_Y_UP
+    tolerance = 1e-4 * motion.bone_lengths[motion.bone_lengths > 0].min() * 1e-3
+    # FBX bones are rigid: the joints the bones reach, keeping their lengths.
+    expected = motion.xyz if suffix == ".glb" else motion_positions(joint_rotations(
+        motion.xyz, motion.skeleton, motion.bone_lengths, keep_lengths=True), motion.skeleton)
+    for frame in frames:
+        heads = np.array([report["heads"][str(frame)][joint] for joint in motion.skeleton.joints])
+        assert np.abs(heads - 1e-3 * to_blender.apply(expected[frame])).max() < tolerance

@@ -13,9 +13,12 @@ from handdb.export.bvh import depth_first_order
 from handdb.export.rotations import CAMERA_TO_Y_UP
 from handdb.hand.skeletons import frame_bone_lengths, load_skeleton
 from tests.integration.cli.test_export_cli import write_database
+from tests.support.gltf_reading import open_gltf
 from tests.support.motions import make_hinge_motion
+from tests.support.usd_reading import joint_world_positions, open_skeleton
 from tests.unit.export.test_bvh import parse_bvh
 from tests.unit.export.test_c3d_export import FLOAT32_MM, read_with_c3d_package
+from tests.unit.export.test_gltf import FLOAT32_M
 from tests.unit.export.test_trc import read_trc
 
 runner = CliRunner()
@@ -101,7 +104,7 @@ def dhg_database(dhg_mm, tmp_path_factory):
     return write_database(tmp_path_factory.mktemp("dhg") / "db", motion, clip_id="dhg")
 
 
-@pytest.mark.parametrize("name", ["trc", "c3d", "bvh", "usd"])
+@pytest.mark.parametrize("name", ["trc", "c3d", "bvh", "usd", "glb"])
 def test_real_capture_exports_in_every_format(dhg_database, dhg_mm, tmp_path, name):
     started = time.perf_counter()
     result = export("--db", dhg_database, "--format", name, "--out", tmp_path)
@@ -124,5 +127,9 @@ def test_real_capture_exports_in_every_format(dhg_database, dhg_mm, tmp_path, na
         assert len(values) == 95
         assert [j["name"] for j in joints if j["name"]] == [
             skeleton.joints[j] for j in depth_first_order(skeleton)]
+    elif name == "glb":
+        np.testing.assert_allclose(open_gltf(path).joint_world_positions(), 1e-3 * expected,
+                                   atol=FLOAT32_M)
     else:
-        assert path.stat().st_size > 0
+        np.testing.assert_allclose(joint_world_positions(open_skeleton(path), 95), expected,
+                                   atol=1e-3)

@@ -1,0 +1,71 @@
+"""FBX export finds Blender, or says exactly how to get it (the conversion itself is tested
+with Blender in tests/integration/blender)."""
+
+import pytest
+from typer.testing import CliRunner
+
+from handdb.cli import app
+from handdb.errors import MissingToolError, ParameterError
+from handdb.export.fbx import BLENDER_VARIABLE, blender_command, export_clip_fbx
+from handdb.hand.skeletons import load_skeleton
+from tests.integration.cli.test_export_cli import write_database
+from tests.support.motions import make_hinge_motion
+
+
+@pytest.fixture
+def no_blender(monkeypatch, tmp_path):
+    monkeypatch.delenv(BLENDER_VARIABLE, raising=False)
+    monkeypatch.setenv("PATH", str(tmp_path / "empty-bin"))
+
+
+def test_without_blender_the_error_says_how_to_get_it(no_blender, tmp_path):
+    motion = make_hinge_motion(load_skeleton("mediapipe21"), n_frames=4, seed=1)
+    with pytest.raises(MissingToolError, match="blender.org.*pip install bpy.*--format glb"):
+        export_clip_fbx(tmp_path / "clip.fbx", clip_id="c", skeleton=motion.skeleton,
+                        xyz=motion.xyz, bone_lengths=motion.bone_lengths, fps=30.0,
+                        units="mm", hand="right")
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_a_blender_variable_naming_no_file_is_refused(monkeypatch, tmp_path):
+    monkeypatch.setenv(BLENDER_VARIABLE, str(tmp_path / "blender"))
+    with pytest.raises(MissingToolError, match=f"{BLENDER_VARIABLE}=.*blender is not a file"):
+        blender_command()
+
+
+@pytest.mark.parametrize(("name", "expected"), [
+    ("python3.11", []),
+    ("blender", ["--background", "--factory-startup", "--python-exit-code", "1", "--python"]),
+])
+def test_blender_runs_as_its_python_or_its_executable(monkeypatch, tmp_path, name, expected):
+    program = tmp_path / name
+    program.write_text("")
+    monkeypatch.setenv(BLENDER_VARIABLE, str(program))
+    assert blender_command() == [str(program), *expected]
+
+
+def test_blender_on_the_path_is_found(monkeypatch, tmp_path):
+    monkeypatch.delenv(BLENDER_VARIABLE, raising=False)
+    program = tmp_path / "blender"
+    program.write_text("#!/bin/sh\n")
+    program.chmod(0o755)
+    monkeypatch.setenv("PATH", str(tmp_path))
+    assert blender_command()[0] == str(program)
+
+
+def test_the_suffix_is_checked_first(no_blender, tmp_path):
+    motion = make_hinge_motion(load_skeleton("mediapipe21"), n_frames=4, seed=1)
+    with pytest.raises(ParameterError, match="suffix must be .fbx"):
+        export_clip_fbx(tmp_path / "clip.glb", clip_id="c", skeleton=motion.skeleton,
+                        xyz=motion.xyz, bone_lengths=motion.bone_lengths, fps=30.0,
+                        units="mm", hand="right")
+
+
+def test_the_command_reports_missing_blender(no_blender, tmp_path):
+    motion = make_hinge_motion(load_skeleton("mediapipe21"), n_frames=4, seed=1)
+    db = write_database(tmp_path / "db", motion)
+    result = CliRunner().invoke(app, ["export", "--db", db, "--format", "fbx", "--out",
+                                      str(tmp_path / "out")])
+    assert result.exit_code == 1
+    assert "error: FBX export runs Blender, which was not found" in result.stderr
+    assert not any((tmp_path / "out").glob("*"))
