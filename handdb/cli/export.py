@@ -46,9 +46,9 @@ def _fail(exc: HanddbError) -> typer.Exit:
     return typer.Exit(1)
 
 
-def _export(db: str, clip: str, out: Path, format_name: str,
+def _export(db: str, clip: str, out: Path, format_names: tuple[str, ...],
             keep_lengths: bool = False) -> None:
-    suffixes = FORMATS[format_name].suffixes
+    suffixes = tuple(suffix for name in format_names for suffix in FORMATS[name].suffixes)
     if out.suffix not in suffixes:
         raise typer.BadParameter(f"'{out}' must end in one of {', '.join(suffixes)}",
                                  param_hint="--out")
@@ -63,13 +63,13 @@ def _export(db: str, clip: str, out: Path, format_name: str,
 def export_usd(clip: Clip, out: UsdOut, db: Db = DEFAULT_DB,
                keep_lengths: KeepLengths = False) -> None:
     """Export a clip as a UsdSkel animation with a skinned hand mesh."""
-    _export(db, clip, out, "usdz" if out.suffix == ".usdz" else "usd", keep_lengths)
+    _export(db, clip, out, ("usd", "usdz"), keep_lengths)
 
 
 @app.command("export-bvh")
 def export_bvh(clip: Clip, out: BvhOut, db: Db = DEFAULT_DB) -> None:
     """Export a clip's joint rotations as BVH."""
-    _export(db, clip, out, "bvh")
+    _export(db, clip, out, ("bvh",))
 
 
 @app.command("export")

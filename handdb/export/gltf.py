@@ -34,6 +34,7 @@ import os
 import tempfile
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 import trimesh
@@ -51,6 +52,9 @@ from handdb.export.rotations import (
     world_transforms,
 )
 from handdb.hand.skeletons import Skeleton
+
+if TYPE_CHECKING:
+    import pygltflib
 
 GLB_SUFFIX = ".glb"
 
@@ -132,7 +136,8 @@ def _mesh_accessors(buffer: _Buffer, skeleton: Skeleton, bone_lengths: np.ndarra
 
 
 def build_clip_gltf(*, clip_id: str, skeleton: Skeleton, motion: JointMotion,
-                    bone_lengths: np.ndarray, fps: float, units: str, hand: str):
+                    bone_lengths: np.ndarray, fps: float, units: str,
+                    hand: str) -> pygltflib.GLTF2:
     """Build the glTF document of a clip (see the module doc for its layout).
 
     Parameters

@@ -1,6 +1,7 @@
 import pytest
 
 from handdb.errors import RegistryError, UnknownNameError
+from handdb.export import FORMATS as EXPORTS
 from handdb.gapfill import METHODS as GAP_FILLING
 from handdb.ingest.registry import FORMATS
 from handdb.lifting import METHODS as LIFTING
@@ -31,6 +32,7 @@ def test_an_unknown_name_lists_the_known_ones():
     (GAP_FILLING, {"previous", "previous-diff", "interfinger", "intrafinger",
                    "intrafinger-rate", "linear", "cubic", "pchip", "lowrank", "rigid",
                    "auto"}),
+    (EXPORTS, {"usd", "usdz", "bvh", "glb", "fbx", "trc", "c3d"}),
 ])
 def test_every_registry_is_filled_by_importing_its_package(registry, names):
     assert names <= set(registry)
