@@ -16,7 +16,7 @@ from pathlib import Path
 
 import numpy as np
 
-from handdb.errors import StoreError
+from handdb.errors import ParameterError, StoreError
 from handdb.export.formats import FORMATS, ExportFormat, ExportOptions, format_for_suffix
 from handdb.hand.skeletons import Skeleton, bone_length_array, load_skeleton
 from handdb.store.database import Store
@@ -232,10 +232,16 @@ def export_stored_clips(
     UnknownNameError
         If ``format_name`` is not a format; the message lists those that are (raised before
         anything is read).
+    ParameterError
+        If ``out_dir`` is a file.
     StoreError
         If a clip of ``clip_ids`` is not in the database (before anything is written).
     """
     entry = FORMATS[format_name]
+    out_dir = Path(out_dir)
+    if out_dir.exists() and not out_dir.is_dir():
+        raise ParameterError(f"{out_dir} is a file; --out names the folder that receives one "
+                             "file per clip")
     store = Store(db)
     stored = store.partition_keys("clips")
     if clip_ids is None:
@@ -244,7 +250,6 @@ def export_stored_clips(
     if unknown:
         raise StoreError(f"database {store.url} has no clip {', '.join(map(repr, unknown))}; "
                          "the clips are listed by handdb sql 'SELECT clip_id FROM clips'")
-    out_dir = Path(out_dir)
     options = options or ExportOptions()
     for clip_id in clip_ids:
         try:

@@ -1,5 +1,7 @@
 """``handdb export``: many clips at once, in any format, run as a user runs it."""
 
+import subprocess
+import sys
 import time
 from types import SimpleNamespace
 
@@ -12,6 +14,7 @@ from handdb.export import FORMATS
 from handdb.export.bvh import depth_first_order
 from handdb.export.rotations import CAMERA_TO_Y_UP
 from handdb.hand.skeletons import frame_bone_lengths, load_skeleton
+from handdb.store.query import query
 from tests.integration.cli.test_export_cli import write_database
 from tests.support.gltf_reading import open_gltf
 from tests.support.motions import make_hinge_motion
@@ -84,6 +87,14 @@ def test_an_unknown_clip_writes_nothing(database, tmp_path):
     assert not (tmp_path / "out").exists()
 
 
+def test_an_output_folder_that_is_a_file_is_refused(database, tmp_path):
+    db, _ = database
+    (tmp_path / "out").write_text("")
+    result = export("--db", db, "--format", "trc", "--out", tmp_path / "out")
+    assert result.exit_code == 1
+    assert "out is a file; --out names the folder" in result.stderr
+
+
 def test_an_unknown_format_lists_the_choices(database, tmp_path):
     db, _ = database
     result = export("--db", db, "--format", "obj", "--out", tmp_path / "out")
@@ -133,3 +144,27 @@ def test_real_capture_exports_in_every_format(dhg_database, dhg_mm, tmp_path, na
     else:
         np.testing.assert_allclose(joint_world_positions(open_skeleton(path), 95), expected,
                                    atol=1e-3)
+
+
+def test_a_built_database_exports_every_clip_from_the_command_line(demo_db, tmp_path):
+    """The demo build's clips, through the installed command's entry point in a new process."""
+    command = [sys.executable, "-c", "from handdb.cli import main; main()", "export", "--db",
+               demo_db]
+    clip_ids = query(demo_db, "SELECT clip_id FROM clips ORDER BY clip_id").column(0).to_pylist()
+    assert len(clip_ids) == 2
+    for name in ("trc", "glb"):
+        run = subprocess.run([*command, "--format", name, "--out", str(tmp_path / name)],
+                             capture_output=True, text=True, timeout=300, check=False)
+        assert run.returncode == 0, run.stderr[-2000:]
+        assert run.stdout.split() == [str(tmp_path / name / f"{clip_id}.{name}")
+                                      for clip_id in clip_ids]
+    for clip_id in clip_ids:
+        rows = query(demo_db, "SELECT frame, joint_index, x, y, z FROM joints_3d WHERE clip_id = "
+                     f"'{clip_id}' ORDER BY frame, joint_index").to_pydict()
+        trc = read_trc(tmp_path / "trc" / f"{clip_id}.trc")
+        xyz = np.full(trc["xyz"].shape, np.nan)
+        xyz[rows["frame"], rows["joint_index"]] = np.column_stack([rows[a] for a in "xyz"])
+        expected = CAMERA_TO_Y_UP.apply(xyz.reshape(-1, 3)).reshape(xyz.shape)
+        np.testing.assert_allclose(trc["xyz"], expected, atol=1e-6)
+        gltf = open_gltf(tmp_path / "glb" / f"{clip_id}.glb").joint_world_positions()
+        np.testing.assert_allclose(gltf, 1e-3 * expected, atol=FLOAT32_M)
