@@ -240,8 +240,8 @@ def export_stored_clips(
     entry = FORMATS[format_name]
     out_dir = Path(out_dir)
     if out_dir.exists() and not out_dir.is_dir():
-        raise ParameterError(f"{out_dir} is a file; --out names the folder that receives one "
-                             "file per clip")
+        raise ParameterError(f"{out_dir} is a file, not a folder to receive one file per "
+                             "clip")
     store = Store(db)
     stored = store.partition_keys("clips")
     if clip_ids is None:

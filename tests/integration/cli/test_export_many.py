@@ -14,6 +14,7 @@ from handdb.export import FORMATS
 from handdb.export.bvh import depth_first_order
 from handdb.export.rotations import CAMERA_TO_Y_UP
 from handdb.hand.skeletons import frame_bone_lengths, load_skeleton
+from handdb.store.database import Store
 from handdb.store.query import query
 from tests.integration.cli.test_export_cli import write_database
 from tests.support.gltf_reading import open_gltf
@@ -92,7 +93,19 @@ def test_an_output_folder_that_is_a_file_is_refused(database, tmp_path):
     (tmp_path / "out").write_text("")
     result = export("--db", db, "--format", "trc", "--out", tmp_path / "out")
     assert result.exit_code == 1
-    assert "out is a file; --out names the folder" in result.stderr
+    assert "out is a file, not a folder" in result.stderr
+
+
+def test_a_clip_without_its_motion_is_skipped(tmp_path):
+    motion = make_hinge_motion(load_skeleton("mediapipe21"), n_frames=5, seed=2)
+    for clip_id in ("kept", "lost"):
+        db = write_database(tmp_path / "db", motion, clip_id=clip_id)
+    Store(db).delete("joints_3d", "lost")
+    result = export("--db", db, "--format", "c3d", "--out", tmp_path / "out")
+    assert result.exit_code == 3
+    assert result.stdout.split() == [str(tmp_path / "out" / "kept.c3d")]
+    assert "skipped lost: database" in result.stderr
+    assert "has no 'joints_3d' rows for clip 'lost'" in result.stderr
 
 
 def test_an_unknown_format_lists_the_choices(database, tmp_path):
