@@ -1,5 +1,12 @@
 """The default lifting method, ``kinematic``: depth signs settled with what hands can do.
 
+A detector's points jitter, and the depth of a bone lying nearly in the image plane is the
+square root of a small difference of its length and its image, so a pixel of jitter turns
+into millimetres of depth and flips signs. The tracks are therefore first smoothed in time
+where they jitter (:func:`handdb.gapfill.denoise.denoise`: a Savitzky-Golay window chosen
+by Stein's risk on the clip's own measured noise, none on clean tracks or lone images), and
+the result's ``x, y`` follow the smoothed points.
+
 Per frame, the unsigned depth of every bone follows from eq. 5 at a robust, smoothed scale:
 the second-largest ratio of image to bone length (one outlier bone allowed), then an upper
 percentile over a window of frames (:func:`handdb.lifting.temporal.smooth_scale`). The
@@ -45,6 +52,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from handdb.clip import Camera
+from handdb.gapfill.denoise import denoise
 from handdb.hand.layout import HandLayout
 from handdb.hand.skeletons import Skeleton
 from handdb.lifting.finger_geometry import FingerCandidates, perspective_candidates
@@ -515,6 +523,7 @@ def lift_kinematic(uv: np.ndarray, skeleton: Skeleton, bone_lengths: np.ndarray,
     Parameters are those of :func:`handdb.lifting.lift`.
     """
     parts = palm_parts(skeleton)
+    uv = denoise(uv, ~np.isfinite(uv).all(axis=-1))[0]
     image = centred_pixels(uv, camera)
     projected = projected_lengths(image, skeleton)
     scale = smooth_scale(eq6_scale(projected, bone_lengths, rank=SCALE_RANK))
