@@ -26,6 +26,13 @@ CAMERA_MODELS = ("orthographic", "pinhole")
 #: The camera model of clips whose data is already 3D (marker clips).
 NO_CAMERA = "none"
 
+#: How a clip's frames were sampled (:attr:`Clip.sampling`): ``"video"``, consecutive
+#: samples of one recording, in time order; ``"images"``, independent images (DeepLabCut's
+#: labelled data), whose order says nothing, so that every stage treats each frame on its
+#: own (no interpolation, smoothing or temporal model across frames).
+VIDEO, IMAGES = "video", "images"
+SAMPLINGS = (VIDEO, IMAGES)
+
 
 @dataclass(frozen=True)
 class Camera:
@@ -130,6 +137,9 @@ class Clip:
         Every input file of the clip, sidecar first.
     content_hash
         SHA-256 over the clip's input files; the clip's identity in the database.
+    sampling
+        ``"video"`` (the default) or ``"images"``: see :data:`SAMPLINGS`; the reader
+        decides it, the ``clips`` table stores it.
     """
 
     spec: ClipSpec
@@ -141,6 +151,12 @@ class Clip:
     source_files: tuple[str, ...]
     content_hash: str
     markers: np.ndarray | None = None
+    sampling: str = VIDEO
+
+    def __post_init__(self) -> None:
+        if self.sampling not in SAMPLINGS:
+            raise ValueError(f"sampling must be one of {', '.join(SAMPLINGS)}, "
+                             f"got {self.sampling!r}")
 
     @property
     def clip_id(self) -> str:

@@ -87,6 +87,7 @@ def clips_table(result: ClipResult, source_files: list[str]) -> pa.Table:
         "image_width": [spec.image_width],
         "image_height": [spec.image_height],
         "n_frames": [clip.n_frames],
+        "sampling": [clip.sampling],
         "n_joints": [clip.skeleton.n_joints],
         "n_observed": [int(clip.observed.sum())],
         "min_confidence": [spec.min_confidence],

@@ -150,24 +150,31 @@ def resolve_bone_lengths(result: ClipResult, ratios: pa.Table | None) -> ClipRes
 
 
 def fill(result: ClipResult, options: BuildOptions) -> ClipResult:
-    """Fill the 2D clip's missing points with the chosen gap-filling method."""
+    """Fill the 2D clip's missing points with the chosen gap-filling method.
+
+    A clip of independent images (``clip.sampling``) is filled image by image.
+    """
     clip = result.clip
     method, params = _method(options.gap_fill, clip.spec.gap_fill, DEFAULT_GAP_FILL)
     try:
-        filled = fill_gaps(clip.uv, clip.observed, clip.skeleton, method, **params)
+        filled = fill_gaps(clip.uv, clip.observed, clip.skeleton, method,
+                           sampling=clip.sampling, **params)
     except (*METHOD_ERRORS, ClipDataError) as error:
         raise _method_refusal(error, clip, "gap_fill") from None
     return replace(result, fill=filled)
 
 
 def lift_clip(result: ClipResult, options: BuildOptions) -> ClipResult:
-    """Lift the filled 2D points to 3D with the chosen method."""
+    """Lift the filled 2D points to 3D with the chosen method.
+
+    A clip of independent images (``clip.sampling``) is lifted image by image.
+    """
     clip = result.clip
     method, params = _method(options.lift, clip.spec.lift, DEFAULT_LIFT)
     bones = _needs(result.bones, "bone lengths", result)
     try:
         lifted = lift(result.uv, clip.skeleton, bones.lengths, clip.spec.camera,
-                      method=method, hand=clip.spec.hand, **params)
+                      method=method, hand=clip.spec.hand, sampling=clip.sampling, **params)
     except (*METHOD_ERRORS, ClipDataError) as error:
         raise _method_refusal(error, clip, "lift") from None
     return replace(result, lifted=lifted)
@@ -214,7 +221,8 @@ def validate(result: ClipResult, options: BuildOptions) -> ClipResult:
     for method in methods:
         if method not in estimates:
             estimates[method] = lift(result.uv, clip.skeleton, bones.lengths,
-                                     clip.spec.camera, method=method, hand=clip.spec.hand)
+                                     clip.spec.camera, method=method, hand=clip.spec.hand,
+                                     sampling=clip.sampling)
     table = validation_table(clip.clip_id, clip.truth, estimates, clip.skeleton, clip.spec.units)
     return replace(result, validation=table, report=markdown_summary(clip.clip_id, table))
 

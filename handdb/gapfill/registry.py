@@ -11,10 +11,11 @@ point was filled by what.
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
+from handdb.clip import IMAGES, SAMPLINGS, VIDEO
 from handdb.gapfill.gaps import find_gaps, mask_points
 from handdb.hand.skeletons import Skeleton
 from handdb.registry import Registry
@@ -152,11 +153,36 @@ def _unfilled_flags(unfilled: np.ndarray, skeleton: Skeleton) -> list[GapFlag]:
     ]
 
 
+def _fill_each_image(info: MethodInfo, uv: np.ndarray, missing: np.ndarray,
+                     skeleton: Skeleton, params: dict[str, object]) -> MethodOutput:
+    """Run a method on every frame on its own, as if each were a clip of one frame.
+
+    Independent images share no time: what fills a point is the frame's own points and the
+    hand model (a DIP on its chord, a joint never seen from the rest pose fitted to the
+    frame), never a neighbouring image. A frame that observes no point is left unfilled.
+    """
+    filled = uv.copy()
+    labels = np.full(missing.shape, "", dtype=object)
+    has_labels = False
+    flags: list[GapFlag] = []
+    for frame in np.flatnonzero(~missing.all(axis=1)):
+        one = info.fill(uv[frame:frame + 1], missing[frame:frame + 1], skeleton, **params)
+        filled[frame] = one.uv[0]
+        if one.labels is not None:
+            labels[frame], has_labels = one.labels[0], True
+        flags += [replace(flag, start=flag.start + int(frame), stop=flag.stop + int(frame))
+                  for flag in one.flags]
+    return MethodOutput(filled, labels=labels.astype(str) if has_labels else None,
+                        flags=tuple(flags))
+
+
 def fill_gaps(
     uv: np.ndarray,
     observed: np.ndarray,
     skeleton: Skeleton,
     method: str = DEFAULT_METHOD,
+    *,
+    sampling: str = VIDEO,
     **params: object,
 ) -> FillResult:
     """Fill the missing points of 2D tracks.
@@ -171,6 +197,10 @@ def fill_gaps(
         The skeleton the joint axis follows.
     method
         A registered method name (see :data:`METHODS`); :data:`DEFAULT_METHOD` by default.
+    sampling
+        :data:`~handdb.clip.VIDEO` (frames in time order) or :data:`~handdb.clip.IMAGES`
+        (independent images: the method runs on each frame on its own, and a frame that
+        observes no point stays unfilled).
     **params
         Parameters of the method.
 
@@ -188,7 +218,8 @@ def fill_gaps(
         observed in a clip with frames observing no point,
         :func:`~handdb.gapfill.auto.check_placeable`).
     ValueError
-        If the shapes of ``uv``, ``observed`` and ``skeleton`` disagree.
+        If the shapes of ``uv``, ``observed`` and ``skeleton`` disagree, or ``sampling``
+        is unknown.
     """
     info = METHODS[method]
     uv = np.asarray(uv, dtype=np.float64)
@@ -198,11 +229,14 @@ def fill_gaps(
             f"uv must be (T, {skeleton.n_joints}, 2) and observed (T, {skeleton.n_joints}) for "
             f"skeleton '{skeleton.name}'; got {uv.shape} and {observed.shape}"
         )
+    if sampling not in SAMPLINGS:
+        raise ValueError(f"sampling must be one of {', '.join(SAMPLINGS)}, got {sampling!r}")
     missing = ~observed | ~(np.isfinite(uv[..., 0]) & np.isfinite(uv[..., 1]))
     frame, joint = mask_points(missing)
     hidden = uv.copy()
     hidden[frame, joint] = np.nan
-    output = info.fill(hidden, missing, skeleton, **params)
+    output = (info.fill(hidden, missing, skeleton, **params) if sampling == VIDEO
+              else _fill_each_image(info, hidden, missing, skeleton, params))
     filled_uv = uv.copy()
     filled_uv[frame, joint] = output.uv[frame, joint]
     done = np.isfinite(filled_uv[frame, joint]).all(axis=-1)
@@ -212,8 +246,12 @@ def fill_gaps(
     labels = np.asarray(method if output.labels is None else output.labels, dtype=str)
     fill_method = np.zeros(missing.shape, dtype=labels.dtype)
     fill_method[frame, joint] = labels if labels.ndim == 0 else labels[frame, joint]
+    edges = _edge_flags(missing, skeleton)
+    if sampling == IMAGES:
+        # the first and last image are no edges of anything
+        edges = [flag for flag in edges if flag.kind == WHOLE_CLIP]
     flags = (
-        *_edge_flags(missing, skeleton),
+        *edges,
         *output.flags,
         *_unfilled_flags(missing & ~filled, skeleton),
     )

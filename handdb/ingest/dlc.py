@@ -13,7 +13,10 @@ when the ``individuals`` row names more than one; empty cells never count as one
 ``frame_from`` says where frame numbers come from: ``"index"`` (the default, the frame
 index of an analysed video), ``"image_name"`` (the last run of digits of the image's file
 name, ``img040.png`` -> 40; the images must be at least :data:`LABELLED_MIN_SHARE` of the
-frames they span) or ``"row"`` (0, 1, 2, ... in row order). Body part names
+frames they span) or ``"row"`` (0, 1, 2, ... in row order). Labelled data read by
+``"row"`` is a set of independent images, not a track: the clip's
+:attr:`~handdb.clip.Clip.sampling` is ``"images"``, and every stage takes each frame on its
+own. Body part names
 resolve by the one ``joint_map`` rule (:func:`~handdb.ingest.observations.resolve_names`);
 an empty ``x``/``y`` is a missing point.
 """
@@ -28,7 +31,7 @@ from pathlib import Path
 import numpy as np
 import pyarrow as pa
 
-from handdb.clip import ClipSpec
+from handdb.clip import IMAGES, VIDEO, ClipSpec
 from handdb.errors import InputError
 from handdb.hand.skeletons import Skeleton
 from handdb.ingest.delimited import (
@@ -188,6 +191,16 @@ def _image_numbers(table: DelimitedTable, index: list[str]) -> np.ndarray:
     return frames
 
 
+def _first_image(table: DelimitedTable, index: list[str]) -> int | None:
+    """The first data row whose index is an image path (labelled data), or ``None``."""
+    if len(index) > 1:
+        return 0 if table.n_rows else None
+    for row, cell in enumerate(table.columns[index[0]].to_pylist()):
+        if IMAGE_PATH.search(cell):
+            return row
+    return None
+
+
 def _frames(table: DelimitedTable, index: list[str], spec: ClipSpec) -> np.ndarray:
     """Frame number of every data row, ``(N,) int64``, by the sidecar's ``frame_from``."""
     frame_from = spec.frame_from or "index"
@@ -195,14 +208,14 @@ def _frames(table: DelimitedTable, index: list[str], spec: ClipSpec) -> np.ndarr
         return np.arange(table.n_rows, dtype=np.int64)
     if frame_from == "image_name":
         return _image_numbers(table, index)
-    cells = table.columns[index[0]].to_pylist()
-    for row, cell in enumerate(cells):
-        if len(index) > 1 or IMAGE_PATH.search(cell):
-            shown = "\\".join(table.columns[name][row].as_py() for name in index)
-            raise table.error(row, "frame", f"{quoted(shown)} is an image path (DeepLabCut "
-                              'labelled data); add "frame_from": "image_name" (frame = the '
-                              'image\'s number) or "frame_from": "row" to '
-                              f"{Path(spec.path).name}")
+    row = _first_image(table, index)
+    if row is not None:
+        shown = "\\".join(table.columns[name][row].as_py() for name in index)
+        raise table.error(row, "frame", f"{quoted(shown)} is an image path (DeepLabCut "
+                          'labelled data); add "frame_from": "row" to '
+                          f"{Path(spec.path).name} to read the images as independent "
+                          'frames, or "frame_from": "image_name" to place them in their '
+                          "video by the image's number")
     return table.frames(index[0])
 
 
@@ -236,6 +249,9 @@ def read(path: str | Path, spec: ClipSpec, skeleton: Skeleton) -> Observations:
         raise InputError(path, "has header rows but no data rows",
                          line=layout.rows["coords"][0])
     frame = _frames(table, index, spec)
+    # Labelled images read in row order are unrelated frames (picked from a video, often
+    # from several): no stage may treat them as a track.
+    images = spec.frame_from == "row" and _first_image(table, index) is not None
     kept = [(bodypart, joint) for bodypart, joint in zip(bodyparts, joints, strict=True)
             if joint >= 0]
 
@@ -264,6 +280,7 @@ def read(path: str | Path, spec: ClipSpec, skeleton: Skeleton) -> Observations:
         names=frozenset(bodyparts),
         fields={"u": "{joint}.x", "v": "{joint}.y", "confidence": "{joint}.likelihood"},
         joint_names=tuple(joint_names),
+        sampling=IMAGES if images else VIDEO,
     )
 
 

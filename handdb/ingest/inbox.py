@@ -369,4 +369,5 @@ def load_clip(entry: ClipEntry, content_hash: str | None = None) -> Clip:
         source_format=track_format.name,
         source_files=tuple(str(path) for path in entry.paths),
         content_hash=hash_hex,
+        sampling=observations.sampling,
     )

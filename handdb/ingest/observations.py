@@ -15,7 +15,7 @@ from pathlib import Path
 
 import numpy as np
 
-from handdb.clip import ClipSpec
+from handdb.clip import VIDEO, ClipSpec
 from handdb.errors import InputError
 from handdb.hand.skeletons import Skeleton
 from handdb.ingest.limits import (
@@ -149,6 +149,7 @@ class _Rows:
     names: frozenset[str]
     fields: Mapping[str, str] = field(default_factory=dict)
     joint_names: tuple[str, ...] = ()
+    sampling: str = VIDEO
 
     @property
     def n_rows(self) -> int:
@@ -293,6 +294,10 @@ class Observations(_Rows):
     joint_names
         The source's name of each skeleton joint, for ``{joint}`` in ``fields``; empty
         for the canonical names.
+    sampling
+        :data:`~handdb.clip.VIDEO` (frames of one recording) or
+        :data:`~handdb.clip.IMAGES` (independent images); becomes
+        :attr:`handdb.clip.Clip.sampling`.
     """
 
     u: np.ndarray

@@ -7,7 +7,7 @@ from typing import Any, Protocol
 import numpy as np
 
 from handdb.checks import check_hand
-from handdb.clip import Camera
+from handdb.clip import SAMPLINGS, VIDEO, Camera
 from handdb.errors import BoneLengthError
 from handdb.hand.skeletons import Skeleton
 from handdb.lifting.result import LiftResult
@@ -59,6 +59,7 @@ def lift(
     *,
     method: str = DEFAULT_METHOD,
     hand: str = "right",
+    sampling: str = VIDEO,
     **params: Any,
 ) -> LiftResult:
     """Give every joint of every frame its depth.
@@ -78,6 +79,10 @@ def lift(
         A name from :func:`available_methods`.
     hand
         ``"right"`` or ``"left"``: which hand the clip shows.
+    sampling
+        :data:`~handdb.clip.VIDEO` (frames in time order: signs and scale are tied across
+        frames) or :data:`~handdb.clip.IMAGES` (independent images: each frame is lifted
+        on its own).
     **params
         Parameters of the method.
 
@@ -92,7 +97,7 @@ def lift(
     UnknownNameError
         On an unknown method.
     ValueError
-        On arrays of the wrong shape.
+        On arrays of the wrong shape, or an unknown ``sampling``.
     BoneLengthError
         If a bone of the skeleton has no positive, finite length.
     """
@@ -100,4 +105,27 @@ def lift(
     uv = np.asarray(uv, dtype=np.float64)
     bone_lengths = np.asarray(bone_lengths, dtype=np.float64)
     _check_inputs(uv, skeleton, bone_lengths, hand)
-    return run(uv, skeleton, bone_lengths, camera, hand=hand, **params)
+    if sampling not in SAMPLINGS:
+        raise ValueError(f"sampling must be one of {', '.join(SAMPLINGS)}, got {sampling!r}")
+    if sampling == VIDEO or len(uv) < 2:
+        return run(uv, skeleton, bone_lengths, camera, hand=hand, **params)
+    return _joined([run(uv[t:t + 1], skeleton, bone_lengths, camera, hand=hand, **params)
+                    for t in range(len(uv))])
+
+
+def _joined(frames: list[LiftResult]) -> LiftResult:
+    """One result from the results of frames lifted one by one, in order."""
+    notes = list(dict.fromkeys(r.note for r in frames if r.note))
+    ambiguous = [t for t, r in enumerate(frames) if r.mirror_ambiguous]
+    if ambiguous:
+        notes.append(f"lifted image by image: the mirror is ambiguous in {len(ambiguous)} "
+                     f"of {len(frames)} images (from image {ambiguous[0]})")
+    return LiftResult(
+        xyz=np.concatenate([r.xyz for r in frames]),
+        sign_confidence=np.concatenate([r.sign_confidence for r in frames]),
+        length_inconsistency=np.concatenate([r.length_inconsistency for r in frames]),
+        scale=np.concatenate([r.scale for r in frames]),
+        method=frames[0].method,
+        mirror_ambiguous=bool(ambiguous),
+        note="; ".join(notes),
+    )

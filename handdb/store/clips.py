@@ -86,4 +86,4 @@ def stored_clip(store: Store, clip_id: str, *, sidecar: str | Path | None = None
                 confidence=scatter(tracks, shape, ("confidence",)), truth=truth,
                 markers=markers, source_format=row["source_format"],
                 source_files=tuple(row["source_files"]),
-                content_hash=content_hash or row["content_hash"])
+                content_hash=content_hash or row["content_hash"], sampling=row["sampling"])
