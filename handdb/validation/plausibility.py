@@ -13,7 +13,11 @@ Before a clip is committed its result is checked against what hands are
   motion, widened by :data:`ANGLE_TOLERANCE_DEG`, in all but :data:`FRAME_SHARE_LIMIT` of
   the frames;
 * **fit residual**: for a model fit, the distance from the markers to the model's joints,
-  frame by frame, below :data:`RESIDUAL_LIMIT_MM` in all but that share of the frames.
+  frame by frame, below :data:`RESIDUAL_LIMIT_MM` in all but that share of the frames;
+* **joint order**: the four knuckles in order across the palm (index, middle, ring,
+  little) and the thumb's base on the index side, in all but :data:`ORDER_SHARE_LIMIT` of
+  the frames: a ``joint_map`` that swaps two fingers' names gives a hand of plausible bones
+  and angles that no hand has.
 
 A clip that fails is not refused: it is stored *flagged* (``clips.flagged`` and
 ``joints_3d.flagged``), with every reason in words (``clips.flag_reasons``). The
@@ -61,6 +65,24 @@ FRAME_SHARE_LIMIT = 0.1
 
 #: Largest median distance of a frame's markers from the fitted joints, mm.
 RESIDUAL_LIMIT_MM = 10.0
+
+#: Share of the frames that may break the joint order before the clip is flagged: more
+#: than half, since a hand seen edge-on lines its knuckles up and noise may swap
+#: neighbours there, while swapped names break the order in almost every frame.
+ORDER_SHARE_LIMIT = 0.5
+
+#: The knuckles across the palm, from the thumb's side.
+KNUCKLES = tuple(f"{finger}_mcp" for finger in FINGERS[1:])
+
+#: A frame's knuckles are out of order when one step between neighbours goes backwards
+#: by more than this share of the mean step: neighbours a few millimetres apart may
+#: trade places by noise.
+ORDER_TOLERANCE = 0.25
+
+#: The thumb joint that stands for its side of the palm, by preference: its MCP, since
+#: trackers put the CMC anywhere from the wrist to the palm's centre (DHG's lies nearer
+#: the little knuckle than the index one in 98 % of the real capture's frames).
+THUMB_BASES = ("thumb_mcp", "thumb_cmc")
 
 #: Robust standard deviation of a median absolute deviation.
 MAD_TO_SIGMA = 1.4826
@@ -287,9 +309,104 @@ def check_residual(residual: np.ndarray, units: str) -> tuple[list[str], np.ndar
             f"{np.nanmedian(median):.1f} mm)"], frames
 
 
+def knuckle_order(xyz: np.ndarray, thumb: np.ndarray | None = None
+                  ) -> tuple[np.ndarray, np.ndarray]:
+    """Where the four knuckles lie across the palm, frame by frame.
+
+    Parameters
+    ----------
+    xyz
+        ``(T, 4, D) float64``: the index, middle, ring and little MCPs, any unit, ``D`` 2
+        or 3; NaN where absent.
+    thumb
+        ``(T, D) float64``: the thumb's base, which sets the line's orientation (the thumb
+        beside the index); ``None`` or NaN: the index and little labels set it.
+
+    Returns
+    -------
+    position, valid
+        ``(T, 4) float64``: each knuckle along the line that fits the four best (their
+        first principal axis), increasing away from the thumb; and ``(T,) bool``, the
+        frames where that line and its orientation are defined (every knuckle present,
+        not all at one point). A swap of two names shows as a step that goes backwards.
+    """
+    centre = xyz.mean(axis=1)                                          # NaN: one absent
+    centred = xyz - centre[:, None]
+    present = np.isfinite(centred).all(axis=(1, 2))
+    axis = np.zeros((len(xyz), xyz.shape[2]))
+    spread = np.zeros(len(xyz))
+    if present.any():
+        # a frame whose knuckles coincide has no line; its singular value is 0
+        _, singular, axes = np.linalg.svd(centred[present], full_matrices=False)
+        axis[present], spread[present] = axes[:, 0], singular[:, 0]
+    position = np.einsum("tkd,td->tk", np.nan_to_num(centred), axis)
+    by_labels = position[:, 3] - position[:, 0]
+    if thumb is not None:
+        by_thumb = -np.einsum("td,td->t", thumb - centre, axis)
+        by_labels = np.where(np.isfinite(by_thumb) & (by_thumb != 0), by_thumb, by_labels)
+    direction = np.sign(by_labels)
+    valid = present & (spread > 0) & (direction != 0)
+    return np.where(valid[:, None], position * direction[:, None], np.nan), valid
+
+
+def check_joint_order(skeleton: Skeleton, xyz: np.ndarray) -> tuple[list[str], np.ndarray]:
+    """Knuckles out of order across the palm, or the thumb on the little finger's side.
+
+    Parameters
+    ----------
+    skeleton
+        The clip's skeleton; without the four MCPs nothing is checked.
+    xyz
+        ``(T, J, D) float64``: the clip's joints (3D, or 2D image points), any unit; NaN
+        where absent.
+
+    Returns
+    -------
+    reasons, rows
+        The reasons found (each naming the joints out of place and what to check), and
+        ``(T, J) bool``: the frames breaking the order, at the joints involved.
+    """
+    rows = np.zeros(xyz.shape[:2], dtype=bool)
+    if not all(name in skeleton.joints for name in KNUCKLES):
+        return [], rows
+    knuckles = skeleton.indices(list(KNUCKLES))
+    base = next((name for name in THUMB_BASES if name in skeleton.joints), None)
+    thumb = xyz[:, skeleton.index(base)] if base is not None else None
+    position, valid = knuckle_order(xyz[:, knuckles], thumb)
+    reasons: list[str] = []
+    steps = np.diff(position, axis=1)                                   # (T, 3)
+    mean_step = np.abs(steps).mean(axis=1, keepdims=True)
+    backwards = valid & np.nan_to_num(steps < -ORDER_TOLERANCE * mean_step).any(axis=1)
+    if valid.any() and backwards.sum() > ORDER_SHARE_LIMIT * valid.sum():
+        orders, counts = np.unique(np.argsort(position[backwards], axis=1), axis=0,
+                                   return_counts=True)
+        seen = [KNUCKLES[k] for k in orders[np.argmax(counts)]]
+        suspects = [name for name, expected in zip(seen, KNUCKLES, strict=True)
+                    if name != expected]
+        rows[np.ix_(backwards, skeleton.indices(suspects))] = True
+        reasons.append(f"the knuckles are out of order across the palm in "
+                       f"{backwards.sum() / valid.sum():.0%} of frames: from the thumb they "
+                       f"lie {', '.join(seen)} (a hand has {', '.join(KNUCKLES)}); "
+                       f"{', '.join(suspects)} look swapped: check the joint_map")
+    if base is None or thumb is None:
+        return reasons, rows
+    index, little = xyz[:, knuckles[0]], xyz[:, knuckles[-1]]
+    near_index = np.linalg.norm(thumb - index, axis=-1)
+    near_little = np.linalg.norm(thumb - little, axis=-1)
+    seen_both = np.isfinite(near_index) & np.isfinite(near_little)
+    wrong = seen_both & (near_little < near_index)
+    if seen_both.any() and wrong.sum() > ORDER_SHARE_LIMIT * seen_both.sum():
+        rows[np.ix_(wrong, skeleton.indices([base, KNUCKLES[0], KNUCKLES[-1]]))] = True
+        reasons.append(f"the thumb is on the little finger's side in "
+                       f"{wrong.sum() / seen_both.sum():.0%} of frames: {base} lies nearer "
+                       f"{KNUCKLES[-1]} than {KNUCKLES[0]}; check the joint_map for a "
+                       "swapped thumb, or index and little fingers swapped")
+    return reasons, rows
+
+
 def assess(skeleton: Skeleton, units: str, hand: str, lengths: np.ndarray,
            xyz: np.ndarray | None, residual: np.ndarray | None = None, *,
-           n_frames: int = 0) -> Verdict:
+           n_frames: int = 0, labelled: np.ndarray | None = None) -> Verdict:
     """Check a clip's result against what hands can be.
 
     Parameters
@@ -307,10 +424,19 @@ def assess(skeleton: Skeleton, units: str, hand: str, lengths: np.ndarray,
         ``(T, J) float64`` marker residuals of a model fit, ``units``; ``None`` otherwise.
     n_frames
         The clip's frames, when ``xyz`` is ``None``.
+    labelled
+        ``(T, J, D) float64``: the points as the input named them, for the joint order
+        (a marker clip's markers, which a model fit would put back in order); ``xyz`` by
+        default.
     """
     reasons, bones = check_bone_lengths(skeleton, lengths, units)
     n_frames = n_frames if xyz is None else len(xyz)
     frames = np.zeros(n_frames, dtype=bool)
+    joints = np.zeros((n_frames, skeleton.n_joints), dtype=bool)
+    named = labelled if labelled is not None else xyz
+    if named is not None:
+        found, joints = check_joint_order(skeleton, named)
+        reasons += found
     if xyz is not None:
         found, unsteady = check_constancy(skeleton, xyz)
         reasons += found
@@ -322,4 +448,4 @@ def assess(skeleton: Skeleton, units: str, hand: str, lengths: np.ndarray,
         found, far = check_residual(residual, units)
         reasons += found
         frames |= far
-    return Verdict(reasons=tuple(reasons), rows=frames[:, None] | bones[None, :])
+    return Verdict(reasons=tuple(reasons), rows=frames[:, None] | bones[None, :] | joints)

@@ -100,3 +100,14 @@ def test_a_short_detector_clip_gets_an_adult_hand(built):
     lengths = {r["bone"]: r["length"] for r in rows}
     assert 60.0 < lengths["index_mcp"] < 100.0 and 35.0 < lengths["middle_pip"] < 55.0
     assert {r["source"] for r in rows} == {"proportions"}
+
+
+def test_real_hands_keep_their_joint_order(built):
+    # the joint-order check (knuckles across the palm, the thumb beside the index) must not
+    # flag what real tools and captures give
+    _, db = built
+    rows = query(db, "SELECT clip_id, flag_reasons FROM clips ORDER BY clip_id").to_pylist()
+    assert len(rows) == 5
+    for row in rows:
+        assert not [r for r in row["flag_reasons"] if "across the palm" in r
+                    or "thumb is on" in r], row

@@ -1,13 +1,14 @@
 """The plausibility gate: real and synthetic hands pass, what no hand could do is flagged."""
 
 import json
+import warnings
 
 import numpy as np
 import pytest
 
 from handdb.hand.skeletons import frame_bone_lengths, load_skeleton
 from handdb.synthetic import synthesize_clip
-from handdb.validation.plausibility import assess, flexion_angles
+from handdb.validation.plausibility import assess, check_joint_order, flexion_angles
 
 MEDIAPIPE = load_skeleton("mediapipe21")
 
@@ -127,3 +128,67 @@ def test_units_are_respected(clip):
     lengths = lengths_of(clip) / 10.0
     assert not assess(MEDIAPIPE, "cm", "right", lengths, clip.xyz / 10.0).flagged
     assert assess(MEDIAPIPE, "mm", "right", lengths, None, n_frames=3).flagged
+
+
+# --- joint order: a joint_map that swaps two fingers (issue 15) -----------------------------
+
+def swapped(points, skeleton, first, second, parts=("mcp",)):
+    out = points.copy()
+    for part in parts:
+        a, b = skeleton.index(f"{first}_{part}"), skeleton.index(f"{second}_{part}")
+        out[:, [a, b]] = out[:, [b, a]]
+    return out
+
+
+@pytest.mark.parametrize("seed", range(8))
+@pytest.mark.parametrize("motion", ["random", "clench", "rapid", "wave"])
+def test_the_population_keeps_its_joint_order_in_3d_and_in_the_image(seed, motion):
+    clip = synthesize_clip(motion, 120, seed=seed, hand="left" if seed % 2 else "right",
+                           camera="pinhole" if seed % 3 == 0 else "orthographic")
+    for points in (clip.xyz, clip.uv):
+        reasons, rows = check_joint_order(MEDIAPIPE, points)
+        assert reasons == [] and not rows.any()
+
+
+def test_real_captures_keep_their_joint_order(dhg_mm, real_tools):
+    assert check_joint_order(load_skeleton("dhg22"), dhg_mm)[0] == []
+    doc = json.loads((real_tools / "interhand" / "test_interhand2.6m_joint_3d.json").read_text())
+    hands = [np.array(frame["world_coord"])[first:first + 21][
+        [INTERHAND_ORDER.index(j) for j in MEDIAPIPE.joints]]
+        for frames in doc.values() for frame in frames.values()
+        for first in (0, 21) if (np.array(frame["joint_valid"]).ravel()[first:first + 21]
+                                 > 0).all()]
+    assert len(hands) >= 4
+    assert check_joint_order(MEDIAPIPE, np.stack(hands))[0] == []
+    rows = [line.split(",") for line in
+            (real_tools / "mediapipe" / "hand_landmarks.csv").read_text().splitlines()[1:]]
+    for hand in ("0", "1"):
+        points = np.array([[float(r[3]), float(r[4])] for r in rows if r[1] == hand])
+        assert check_joint_order(MEDIAPIPE, points.reshape(-1, 21, 2))[0] == []
+
+
+@pytest.mark.parametrize(("first", "second", "named"), [
+    ("index", "ring", "ring_mcp, index_mcp"), ("middle", "ring", "ring_mcp, middle_mcp"),
+    ("ring", "little", "little_mcp, ring_mcp"), ("index", "little", "little_mcp, index_mcp")])
+def test_swapped_fingers_are_flagged_naming_them(clip, first, second, named):
+    for points in (clip.xyz, clip.uv):
+        wrong = swapped(points, MEDIAPIPE, first, second, ("mcp", "pip", "dip", "tip"))
+        reasons, rows = check_joint_order(MEDIAPIPE, wrong)
+        assert f"{named} look swapped: check the joint_map" in reasons[0]
+        assert "out of order across the palm in 100% of frames" in reasons[0]
+        assert rows[:, MEDIAPIPE.indices([f"{first}_mcp", f"{second}_mcp"])].all()
+
+
+def test_index_and_little_swapped_put_the_thumb_on_the_wrong_side(clip):
+    wrong = swapped(clip.xyz, MEDIAPIPE, "index", "little")
+    reasons, _ = check_joint_order(MEDIAPIPE, wrong)
+    assert "thumb_mcp lies nearer little_mcp than index_mcp" in reasons[-1]
+
+
+def test_knuckles_at_one_point_or_missing_are_not_judged():
+    points = np.zeros((3, MEDIAPIPE.n_joints, 3))
+    points[1, :, 0] = np.nan
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        reasons, rows = check_joint_order(MEDIAPIPE, points)
+    assert reasons == [] and not rows.any()
