@@ -13,8 +13,9 @@ frame, here 0; ``POINT:RATE`` must be the sidecar's ``fps``.
 The file is checked before the ``c3d`` package reads it (its header, parameter section
 and data must lie inside the file), every error of the package becomes an
 :class:`~handdb.errors.InputError`, and a file holding fewer frames than its header says
-(a truncated export) is refused. ANALOG, FORCE_PLATFORM and other groups are ignored; a
-file without 3D points (force plates only) is refused.
+(a truncated export) is refused. ANALOG, FORCE_PLATFORM, ROTATION (segment orientations,
+stored after the points by ezc3d and Vicon) and other groups are ignored; a file without 3D
+points (force plates or rotations only) is refused, saying what it holds.
 """
 
 from __future__ import annotations
@@ -113,6 +114,7 @@ def _no_points_reason(reader: c3d.Reader) -> str:
     """Say what a C3D file without 3D points holds instead."""
     analog = reader.get("ANALOG:USED")
     plates = reader.get("FORCE_PLATFORM:USED")
+    rotations = reader.get("ROTATION:USED")
     parts = []
     if analog is not None and analog.int16_value > 0:
         rate = reader.get("ANALOG:RATE")
@@ -120,6 +122,9 @@ def _no_points_reason(reader: c3d.Reader) -> str:
         parts.append(f"{analog.int16_value} analog channels{at}")
     if plates is not None and plates.int16_value > 0:
         parts.append(f"{plates.int16_value} force plates")
+    if rotations is not None and rotations.int16_value > 0:
+        parts.append(f"{rotations.int16_value} rotations (segment orientations, which "
+                     "handdb does not read)")
     held = f" (it has {' and '.join(parts)})" if parts else ""
     return (f"holds no 3D points{held}; handdb reads marker trajectories: export the "
             "markers to C3D")

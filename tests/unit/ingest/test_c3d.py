@@ -72,3 +72,57 @@ def test_a_file_that_is_not_c3d_is_refused(tmp_path):
     path.write_bytes(b"frame,joint,x,y,z\n" * 40)
     with pytest.raises(InputError, match="C3D"):
         c3d_reader.read(path, marker_spec(), SKELETON)
+
+
+#: The ROTATION group ezc3d and Vicon Nexus write beside the points: one orientation per
+#: segment and frame, stored from block ``DATA_START`` on, at ``RATE`` (``RATIO`` per frame).
+ROTATION_SEGMENTS = ("RHND", "RFRA", "RHUM")
+
+
+def write_with_rotations(path, labels, n_frames=4):
+    """A C3D file of points with a ROTATION group, as the c3d package's Writer lays it out."""
+    writer = c3d.Writer(point_rate=120.0, point_units="mm")
+    writer.set_point_labels(labels)
+    group = writer.add_group(5, "ROTATION", "segment orientations")
+    group.add("USED", "segments", 2, "<H", len(ROTATION_SEGMENTS))
+    group.add_str("LABELS", "segment names",
+                  "".join(name.ljust(4) for name in ROTATION_SEGMENTS), 4,
+                  len(ROTATION_SEGMENTS))
+    group.add("DATA_START", "first block of the rotations", 2, "<H", 40)
+    group.add("RATE", "rotations per second", 4, "<f", 120.0)
+    group.add("RATIO", "rotations per point frame", 2, "<H", 1)
+    frames = np.zeros((n_frames, len(labels), 5), dtype=np.float32)
+    frames[..., :3] = np.arange(len(labels) * 3).reshape(len(labels), 3)
+    writer.add_frames([(frame, np.zeros((0, 0), dtype=np.float32)) for frame in frames])
+    with pytest.warns(UserWarning), path.open("wb") as handle:
+        writer.write(handle)
+    return path
+
+
+def test_rotations_beside_the_points_are_ignored(tmp_path):
+    path = write_with_rotations(tmp_path / "m01.c3d", ["RWRA", "STERNUM"])
+    with path.open("rb") as handle, pytest.warns(UserWarning):
+        assert c3d.Reader(handle).get("ROTATION:USED").int16_value == 3, "the group is there"
+    read = c3d_reader.read(path, marker_spec(joint_map={"RWRA": "wrist", "*": None}),
+                           SKELETON)
+    markers = dense_markers(read)
+    assert markers.shape == (4, SKELETON.n_joints, 3)
+    np.testing.assert_array_equal(markers[:, 0], np.tile([0.0, 1.0, 2.0], (4, 1)))
+    assert np.isnan(markers[:, 1:]).all()
+
+
+def test_rotations_without_points_are_refused_saying_so(tmp_path):
+    path = write_with_rotations(tmp_path / "m01.c3d", ["RWRA"])
+    data = bytearray(path.read_bytes())
+    # POINT:USED and the header's point count set to 0: the file holds rotations only. A
+    # group's record is led by its name's length and its negated id, a parameter's by the
+    # name's length and the group's id, then the name, a 2-byte offset, type and rank.
+    (point,) = [gid for gid in range(1, 128) if bytes([5, 256 - gid]) + b"POINT" in data]
+    at = data.index(bytes([4, point]) + b"USED") + 2 + 4 + 2 + 1 + 1
+    data[at:at + 2] = data[2:4] = b"\x00\x00"
+    path.write_bytes(bytes(data))
+    with pytest.raises(InputError) as info:
+        c3d_reader.read(path, marker_spec(), SKELETON)
+    assert info.value.field == "POINT:USED"
+    assert "holds no 3D points (it has 3 rotations (segment orientations" in info.value.reason
+    assert "export the markers to C3D" in info.value.reason
