@@ -12,6 +12,7 @@ validated clip's depth errors as markdown artifacts.
 from __future__ import annotations
 
 import re
+from contextlib import nullcontext
 from typing import Any, cast
 
 from prefect import flow, get_run_logger, task
@@ -95,17 +96,21 @@ def _outcome(future: PrefectFuture) -> ClipResult | Refusal | StageFailed:
                        ThreadPoolTaskRunner(max_workers=DEFAULT_WORKERS)))
 def build(inbox: str, db: str, gap_fill: str | None = None, lift: str | None = None,
           export_usd: bool = True, compare: list[str] | None = None,
-          window: int = DEFAULT_WORKERS * WINDOW_PER_WORKER) -> BuildSummary:
+          window: int = DEFAULT_WORKERS * WINDOW_PER_WORKER, locked: bool = False
+          ) -> BuildSummary:
     """Build the database at ``db`` from the inbox folder ``inbox``.
 
     New and changed clips are processed, each from its first changed stage; unchanged
     clips cost a hash each. Returns the :class:`~handdb.build.BuildSummary`; a ``runs`` row
-    records it.
+    records it. ``locked``: the caller holds the database lock (the orchestrator takes it
+    before the flow starts, so that a second build is refused without a failed flow run);
+    else the flow takes it.
     """
     logger = get_run_logger()
     options = BuildOptions(gap_fill=gap_fill, lift=lift, export_usd=export_usd,
                            compare=tuple(compare or ())).check()
-    with Store(db).lock(), threadpool_limits(limits=BLAS_THREADS, user_api="blas"):
+    with (nullcontext() if locked else Store(db).lock(),
+          threadpool_limits(limits=BLAS_THREADS, user_api="blas")):
         run = Build.begin(inbox, db, options)
         if run.summary.removed_temporaries:
             logger.warning("removed %d half-written files left by an interrupted build",

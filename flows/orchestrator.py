@@ -9,9 +9,11 @@ only when it runs.
 from __future__ import annotations
 
 from collections.abc import Sequence
+from contextlib import nullcontext
 from typing import Any
 
 from handdb.build import BuildOptions, BuildSummary
+from handdb.store import Store
 
 #: Task runners this orchestrator offers.
 RUNNERS: tuple[str, ...] = ("thread", "dask")
@@ -43,8 +45,13 @@ class PrefectOrchestrator:
     runners = RUNNERS
 
     def build(self, inbox: str, db: str, options: BuildOptions, *, runner: str = "thread",
-              workers: int = 4, address: str | None = None) -> BuildSummary:
+              workers: int = 4, address: str | None = None, locked: bool = False
+              ) -> BuildSummary:
         """Run the build flow on ``runner``.
+
+        Unless the caller holds the database lock (``locked``, as
+        :func:`handdb.build.run_build` does), it is taken here, before the flow starts: a
+        second build is refused with the library's message, not inside a flow run.
 
         The Prefect API is this process's (:func:`~handdb_flows.settings.shared_api`):
         Dask's worker processes report to it, and a temporary server started for it ends
@@ -54,10 +61,10 @@ class PrefectOrchestrator:
         from handdb_flows.settings import quick_flows, shared_api
 
         flow_ = build.with_options(task_runner=task_runner(runner, workers, address))
-        with quick_flows(), shared_api():
+        with nullcontext() if locked else Store(db).lock(), quick_flows(), shared_api():
             return flow_(inbox=inbox, db=db, gap_fill=options.gap_fill, lift=options.lift,
                          export_usd=options.export_usd, compare=list(options.compare),
-                         window=workers * WINDOW_PER_WORKER)
+                         window=workers * WINDOW_PER_WORKER, locked=True)
 
     def serve(self, inbox: str, db: str, *, cron: str | None, interval: float | None
               ) -> None:

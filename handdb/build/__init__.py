@@ -71,14 +71,17 @@ def run_build(inbox: str | Path, db: str, options: BuildOptions | None = None, *
         raise InputError(inbox, "is not a folder: create it and put clips in it, or pass "
                          "--inbox (or set HANDDB_INBOX)", field="inbox")
     with Store(db).lock():
-        pass
-    plan = plan_build(inbox, db, options)
+        plan = plan_build(inbox, db, options)
+        if plan.todo and runner != LOCAL_RUNNER:
+            # The lock is held from before the plan to the end of the orchestrator's run:
+            # a second build is refused here, with the library's message, before the
+            # orchestrator starts (inside a Prefect flow the refusal is an ERROR log).
+            return runner_orchestrator(runner).build(str(inbox), db, options,
+                                                     runner=runner, workers=workers,
+                                                     address=address, locked=True)
     # Without a clip to process, what is left (the X-ray tables, the quarantine, the run
     # record) takes milliseconds here and seconds to start an orchestrator for.
-    if not plan.todo or runner == LOCAL_RUNNER:
-        return build_in_process(inbox, db, options, workers=workers, plan=plan)
-    return runner_orchestrator(runner).build(str(inbox), db, options, runner=runner,
-                                             workers=workers, address=address)
+    return build_in_process(inbox, db, options, workers=workers, plan=plan)
 
 
 __all__ = [

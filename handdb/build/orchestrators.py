@@ -39,8 +39,13 @@ class Orchestrator(Protocol):
     """What an orchestrator offers: builds on its runners, scheduled builds, evaluations."""
 
     def build(self, inbox: str, db: str, options: BuildOptions, *, runner: str,
-              workers: int, address: str | None = None) -> BuildSummary:
-        """Build ``db`` from ``inbox`` with the task runner ``runner``."""
+              workers: int, address: str | None = None, locked: bool = False
+              ) -> BuildSummary:
+        """Build ``db`` from ``inbox`` with the task runner ``runner``.
+
+        ``locked``: the caller holds the database lock (``Store(db).lock()``) until this
+        returns, and the build must not take it again; else the build takes it.
+        """
 
     def serve(self, inbox: str, db: str, *, cron: str | None, interval: float | None
               ) -> None:

@@ -104,6 +104,60 @@ def test_a_build_holds_the_lock(inbox, tmp_path):
         build(inbox, db)
 
 
+def _held(db) -> bool:
+    """Whether some build holds the database lock (this process's own included)."""
+    from handdb.errors import DatabaseLockedError
+
+    try:
+        with Store(str(db)).lock():
+            return False
+    except DatabaseLockedError:
+        return True
+
+
+def test_the_lock_is_held_from_the_plan_to_the_end_of_the_flow(inbox, tmp_path,
+                                                               monkeypatch):
+    # a second build that started between the first's plan and its flow used to be
+    # refused inside its own flow run, with an ERROR log from Prefect
+    from handdb_flows.orchestrator import PrefectOrchestrator
+
+    import handdb.build
+
+    db = tmp_path / "db"
+    seen = []
+    plan, orchestrated = handdb.build.plan_build, PrefectOrchestrator.build
+
+    def planning(*args, **kwargs):
+        seen.append(("plan", _held(db)))
+        return plan(*args, **kwargs)
+
+    def orchestrating(self, *args, **kwargs):
+        seen.append(("orchestrator", _held(db), kwargs["locked"]))
+        return orchestrated(self, *args, **kwargs)
+
+    monkeypatch.setattr(handdb.build, "plan_build", planning)
+    monkeypatch.setattr(PrefectOrchestrator, "build", orchestrating)
+    summary = build(inbox, db)
+    assert summary.ok and len(summary.processed) == 3
+    assert seen == [("plan", True), ("orchestrator", True, True)]
+    assert not _held(db)
+
+
+def test_the_prefect_runner_refuses_a_locked_database_before_its_flow(inbox, tmp_path,
+                                                                     caplog):
+    from handdb_flows.orchestrator import PrefectOrchestrator
+
+    from handdb.build import BuildOptions
+    from handdb.errors import DatabaseLockedError
+
+    db = tmp_path / "db"
+    with Store(str(db)).lock(), pytest.raises(DatabaseLockedError, match="being built by"):
+        PrefectOrchestrator().build(str(inbox), str(db), BuildOptions(export_usd=False),
+                                    runner="thread", workers=1)
+    assert not [r for r in caplog.records if r.levelname in ("ERROR", "CRITICAL")]
+    assert not [r for r in caplog.records if r.name.startswith("prefect.flow_runs")]
+
+
 @pytest.mark.slow
 def test_further_methods_are_validated_on_request(tmp_path, write_clip):
     inbox = tmp_path / "inbox"

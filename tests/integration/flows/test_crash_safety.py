@@ -196,6 +196,8 @@ def test_a_second_build_started_at_once_is_refused_and_the_first_completes(
     assert sorted(codes) == [1, 3], outputs
     refused = outputs[codes.index(1)]
     assert "is being built by pid" in refused and "wait for that build" in refused
+    # refused by the library before Prefect starts: no flow run, no ERROR log, no traceback
+    assert "ERROR" not in refused and "Traceback" not in refused, refused
     assert database_digests(db) == database_digests(reference.db)
     assert table_rows(db) == table_rows(reference.db)
     assert query(str(db), "SELECT count(*) AS n FROM runs").column("n")[0].as_py() == 1
