@@ -15,6 +15,11 @@ PALM_ROLES = frozenset({"wrist", "palm_fold", "palm_center", "cmc"})
 #: Bones per finger below the palm that the sign model enumerates (2**3 sign states).
 CHAIN_BONES = 3
 
+#: Sine of the angle between two palm edges below which the palm counts as a line: far
+#: below any hand's (the wrist-index and wrist-little edges meet at some 20 degrees) and
+#: far above rounding (1e-16).
+COLLINEAR_SINE = 1e-9
+
 
 @dataclass(frozen=True)
 class HandLayout:
@@ -82,3 +87,43 @@ def hand_layout(skeleton: Skeleton) -> HandLayout:
         chains=np.array(chains, dtype=np.int64),
         chain_bases=np.array(bases, dtype=np.int64),
     )
+
+
+def unit_vectors(vectors: np.ndarray) -> np.ndarray:
+    """Each vector over its length, ``(..., D) float64``; NaN where the length is 0.
+
+    A zero vector has no direction: it comes out NaN (which the callers' NaN rules skip),
+    not as numpy's 0/0 with a ``RuntimeWarning``.
+    """
+    vectors = np.asarray(vectors, dtype=np.float64)
+    norms = np.linalg.norm(vectors, axis=-1, keepdims=True)
+    return np.divide(vectors, norms, out=np.full_like(vectors, np.nan), where=norms > 0)
+
+
+def palm_normals(wrist: np.ndarray, index_mcp: np.ndarray, little_mcp: np.ndarray,
+                 hand: str) -> np.ndarray:
+    """Unit normals of the palm towards its palmar side.
+
+    Parameters
+    ----------
+    wrist, index_mcp, little_mcp
+        ``(..., 3) float64``: the three joints that span the palm, any unit.
+    hand
+        ``"right"`` or ``"left"``: the right hand's palmar side is that of
+        ``(index - wrist) x (little - wrist)``, the left hand's the opposite.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(..., 3) float64``; NaN where the three joints are collinear or coincide (a
+        degenerate palm has no plane) or one is absent.
+    """
+    across, along = index_mcp - wrist, little_mcp - wrist
+    normal = np.cross(across, along)
+    spans = np.linalg.norm(across, axis=-1) * np.linalg.norm(along, axis=-1)
+    sine = np.divide(np.linalg.norm(normal, axis=-1), spans, out=np.zeros_like(spans),
+                     where=spans > 0)
+    # rounding leaves collinear points a cross product of about 1e-16 of their spans,
+    # which normalises into a direction that means nothing
+    normal[~(sine > COLLINEAR_SINE)] = 0.0
+    return unit_vectors(-normal if hand == "left" else normal)

@@ -34,12 +34,11 @@ from scipy.ndimage import gaussian_filter1d, median_filter
 
 from handdb.compiled import kernel
 from handdb.hand.anatomy import MEAN_HAND_LENGTH_MM
-from handdb.hand.layout import HandLayout, hand_layout
+from handdb.hand.layout import HandLayout, hand_layout, palm_normals
 from handdb.hand.population import KNUCKLE_HEIGHT_SPREAD
 from handdb.hand.shape import mean_shape
 from handdb.hand.skeletons import Skeleton
 from handdb.lifting.geometry import accumulate_depths
-from handdb.lifting.hand_prior import HANDEDNESS
 from handdb.lifting.palm import palm_signs
 from handdb.lifting.palm_template import (
     TEMPLATE_FRAMES,
@@ -218,11 +217,12 @@ def arch_heights(palm: np.ndarray, parts: PalmParts, hand: str, size: float) -> 
     Returns
     -------
     numpy.ndarray
-        ``(..., A) float64``, palm lengths, palmar positive.
+        ``(..., A) float64``, palm lengths, palmar positive; NaN where the wrist and the
+        index and little knuckles are collinear or coincide.
     """
     wrist, index, little = (palm[..., c, :] for c in parts.corners)
-    normal = HANDEDNESS[hand] * np.cross(index - wrist, little - wrist)
-    normal = normal / np.linalg.norm(normal, axis=-1, keepdims=True)
+    # a palm whose corners are collinear has no plane: its heights are NaN, no evidence
+    normal = palm_normals(wrist, index, little, hand)
     knuckles = palm[..., parts.arch, :] - wrist[..., None, :]
     return np.einsum("...ai,...i->...a", knuckles, normal) / size
 

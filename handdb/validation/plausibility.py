@@ -34,6 +34,7 @@ import numpy as np
 
 from handdb.clip import METERS_PER_UNIT
 from handdb.hand import anatomy
+from handdb.hand.layout import palm_normals, unit_vectors
 from handdb.hand.skeletons import FINGERS, Skeleton
 
 #: Hand lengths (distal wrist crease to the middle fingertip) the gate admits, mm: from a
@@ -213,12 +214,9 @@ def check_constancy(skeleton: Skeleton, xyz: np.ndarray) -> tuple[list[str], np.
 
 
 def _palm_normals(skeleton: Skeleton, xyz: np.ndarray, hand: str) -> np.ndarray:
-    """``(T, 3)`` unit normals of the palm towards its palmar side."""
+    """``(T, 3)`` unit normals of the palm towards its palmar side; NaN where degenerate."""
     wrist, index, little = skeleton.indices(["wrist", "index_mcp", "little_mcp"])
-    normal = np.cross(xyz[:, index] - xyz[:, wrist], xyz[:, little] - xyz[:, wrist])
-    if hand == "left":
-        normal = -normal
-    return normal / np.linalg.norm(normal, axis=-1, keepdims=True)
+    return palm_normals(xyz[:, wrist], xyz[:, index], xyz[:, little], hand)
 
 
 def flexion_angles(skeleton: Skeleton, xyz: np.ndarray, hand: str
@@ -240,8 +238,7 @@ def flexion_angles(skeleton: Skeleton, xyz: np.ndarray, hand: str
     angles = {}
     for finger, hinges in _HINGES.items():
         mcp = skeleton.index(f"{finger}_mcp")
-        lateral = np.cross(xyz[:, mcp] - xyz[:, wrist], normal)
-        lateral /= np.linalg.norm(lateral, axis=-1, keepdims=True)
+        lateral = unit_vectors(np.cross(xyz[:, mcp] - xyz[:, wrist], normal))
         for key in hinges:
             name = f"{finger}_{key[1]}"
             if name not in skeleton.joints:
