@@ -6,83 +6,64 @@ there is nothing to do, and otherwise runs the clips on the chosen runner: ``loc
 process, :func:`build_in_process`) or an orchestrator's (:mod:`handdb.build.orchestrators`;
 Prefect's ``thread`` and ``dask``). Whatever runs them, each clip goes through
 :func:`~handdb.build.process.process_clip` and the build through :class:`Build`.
+
+Each name below is imported from its module on first use, so that the command line can
+ask which runners exist (:mod:`handdb.build.orchestrators`) without loading the stages.
 """
 
 from __future__ import annotations
 
-from pathlib import Path
+from typing import TYPE_CHECKING
 
-from handdb.build.options import BuildOptions
-from handdb.build.orchestrators import (
-    DEFAULT_RUNNER,
-    LOCAL_RUNNER,
-    check_runner,
-    load_orchestrator,
-    runner_names,
-    runner_orchestrator,
-)
-from handdb.build.plan import BuildPlan, PlannedClip, plan_build
-from handdb.build.process import BuildContext, StageFailed, process_clip
-from handdb.build.run import (
-    BLAS_THREADS,
-    DEFAULT_WORKERS,
-    FLOW_NAME,
-    Build,
-    BuildSummary,
-    build_in_process,
-    run_clip,
-    summary_markdown,
-)
-from handdb.errors import InputError
-from handdb.store.database import Store
+from handdb.lazy import lazy_attributes
 
+if TYPE_CHECKING:
+    from handdb.build.entry import run_build
+    from handdb.build.options import BuildOptions
+    from handdb.build.orchestrators import (
+        DEFAULT_RUNNER,
+        LOCAL_RUNNER,
+        load_orchestrator,
+        runner_names,
+    )
+    from handdb.build.plan import BuildPlan, PlannedClip, plan_build
+    from handdb.build.process import BuildContext, StageFailed, process_clip
+    from handdb.build.run import (
+        BLAS_THREADS,
+        DEFAULT_WORKERS,
+        FLOW_NAME,
+        Build,
+        BuildSummary,
+        build_in_process,
+        run_clip,
+        summary_markdown,
+    )
 
-def run_build(inbox: str | Path, db: str, options: BuildOptions | None = None, *,
-              runner: str = DEFAULT_RUNNER, workers: int = DEFAULT_WORKERS,
-              address: str | None = None) -> BuildSummary:
-    """Build the database ``db`` from the inbox folder ``inbox``.
+#: Exported name -> the module that defines it.
+_EXPORTS = {
+    "BuildOptions": "handdb.build.options",
+    "DEFAULT_RUNNER": "handdb.build.orchestrators",
+    "LOCAL_RUNNER": "handdb.build.orchestrators",
+    "load_orchestrator": "handdb.build.orchestrators",
+    "runner_names": "handdb.build.orchestrators",
+    "BuildPlan": "handdb.build.plan",
+    "PlannedClip": "handdb.build.plan",
+    "plan_build": "handdb.build.plan",
+    "BuildContext": "handdb.build.process",
+    "StageFailed": "handdb.build.process",
+    "process_clip": "handdb.build.process",
+    "BLAS_THREADS": "handdb.build.run",
+    "DEFAULT_WORKERS": "handdb.build.run",
+    "FLOW_NAME": "handdb.build.run",
+    "Build": "handdb.build.run",
+    "BuildSummary": "handdb.build.run",
+    "build_in_process": "handdb.build.run",
+    "run_clip": "handdb.build.run",
+    "summary_markdown": "handdb.build.run",
+    "run_build": "handdb.build.entry",
+}
 
-    Parameters
-    ----------
-    inbox, db
-        The inbox folder; the database folder or fsspec URL.
-    options
-        What to compute (default: every sidecar's choice, else the default methods).
-    runner
-        ``local`` (this process), or a runner of an installed orchestrator
-        (:func:`~handdb.build.orchestrators.runner_names`).
-    workers
-        Clips processed at once.
-    address
-        The runner's cluster, for runners that take one (Dask's scheduler address).
-
-    Raises
-    ------
-    UnknownNameError
-        For an unknown runner or method, before anything runs.
-    InputError
-        If ``inbox`` is not a folder.
-    DatabaseLockedError
-        If another build holds the database.
-    """
-    options = (options or BuildOptions()).check()
-    check_runner(runner)
-    if not Path(inbox).is_dir():
-        raise InputError(inbox, "is not a folder: create it and put clips in it, or pass "
-                         "--inbox (or set HANDDB_INBOX)", field="inbox")
-    with Store(db).lock():
-        plan = plan_build(inbox, db, options)
-        if plan.todo and runner != LOCAL_RUNNER:
-            # The lock is held from before the plan to the end of the orchestrator's run:
-            # a second build is refused here, with the library's message, before the
-            # orchestrator starts (inside a Prefect flow the refusal is an ERROR log).
-            return runner_orchestrator(runner).build(str(inbox), db, options,
-                                                     runner=runner, workers=workers,
-                                                     address=address, locked=True)
-    # Without a clip to process, what is left (the X-ray tables, the quarantine, the run
-    # record) takes milliseconds here and seconds to start an orchestrator for.
-    return build_in_process(inbox, db, options, workers=workers, plan=plan)
-
+__getattr__ = lazy_attributes(__name__, _EXPORTS)
 
 __all__ = [
     "BLAS_THREADS",

@@ -13,11 +13,13 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from importlib.metadata import entry_points
-from typing import Any, Protocol
+from typing import TYPE_CHECKING, Any, Protocol
 
-from handdb.build.options import BuildOptions
-from handdb.build.run import BuildSummary
 from handdb.errors import HanddbError, UnknownNameError
+
+if TYPE_CHECKING:
+    from handdb.build.options import BuildOptions
+    from handdb.build.run import BuildSummary
 
 #: Entry point group of orchestrators (``name = "module:object"``).
 ORCHESTRATORS = "handdb.orchestrators"

@@ -21,7 +21,13 @@ from rich.console import Console
 from rich.markup import escape
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
+from handdb.build.orchestrators import DEFAULT_RUNNER, runner_names
 from handdb.errors import DamagedFileWarning, HanddbError, UnknownNameError
+from handdb.gapfill import DEFAULT_METHOD as DEFAULT_GAP_FILL
+from handdb.gapfill import METHODS as GAP_FILLING
+from handdb.lifting import DEFAULT_METHOD as DEFAULT_LIFT
+from handdb.lifting import METHODS as LIFTING
+from handdb.lifting import MODEL_FIT
 from handdb.paths import DEFAULT_DB, DEFAULT_INBOX
 
 #: Sub-commands whose modules are imported only when they run, so that ``handdb --help``
@@ -138,6 +144,15 @@ class ClipProgress:
             self._progress.update(self._task, advance=1, description=f"{stage} {clip_id}")
 
 
+def one_of(names: tuple[str, ...]) -> str:
+    """The choices of an option, for its help: ``"one of: a, b, c"``.
+
+    The names come from the registries, which know them without importing the methods
+    (:mod:`handdb.lifting.methods`, :mod:`handdb.gapfill.methods`), so ``--help`` stays fast.
+    """
+    return f"one of: {', '.join(names)}"
+
+
 def print_error(error: Exception, label: str = "error") -> None:
     """Print ``error`` on one logical line, so that paths in it stay whole and literal."""
     console.print(f"[red]{label}:[/] {escape(str(error))}", soft_wrap=True)
@@ -182,20 +197,21 @@ def build(
     inbox: Inbox = DEFAULT_INBOX,
     db: Db = DEFAULT_DB,
     gap_fill: Annotated[str | None, typer.Option(
-        help="Gap-filling method for every clip (default: each clip's sidecar, else the "
-        "best method).")] = None,
+        help=f"Gap-filling method for every clip, {one_of(GAP_FILLING.names())} (default: "
+        f"each clip's sidecar, else {DEFAULT_GAP_FILL}).")] = None,
     lift: Annotated[str | None, typer.Option(
-        help="Lifting method for every clip (default: each clip's sidecar, else the best "
-        "method).")] = None,
+        help=f"Lifting method for every clip, {one_of(LIFTING.names())} (default: each "
+        f"clip's sidecar, else {DEFAULT_LIFT}).")] = None,
     usd: Annotated[bool, typer.Option(help="Export every clip as USD.")] = True,
     compare: Annotated[list[str] | None, typer.Option(
-        help="Also validate this lifting method on clips with ground truth (repeatable; "
-        "e.g. model-fit, about a minute per clip).")] = None,
+        help=f"Also validate this lifting method on clips with ground truth, "
+        f"{one_of(LIFTING.names())} (repeatable; {MODEL_FIT} takes about a minute per "
+        "clip).")] = None,
     workers: Annotated[int, typer.Option(min=1, help="Clips processed in parallel.")] = 4,
     runner: Annotated[str, typer.Option(
-        help="Where clips run: thread (Prefect tasks in this process), dask (Prefect tasks "
-        "on a local Dask cluster unless --dask-address is given), or local (this process, "
-        "without Prefect).")] = "thread",
+        help=f"Where clips run ({one_of(runner_names())}): thread (Prefect tasks in this "
+        "process), dask (Prefect tasks on a local Dask cluster unless --dask-address is "
+        "given), local (this process, without Prefect).")] = DEFAULT_RUNNER,
     dask_address: Annotated[str | None, typer.Option(
         help="Address of an existing Dask scheduler.")] = None,
 ) -> None:

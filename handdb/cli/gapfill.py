@@ -84,7 +84,8 @@ def gapfill_eval(
     mask: Annotated[list[str] | None, typer.Option(
         help=f"Mask, repeatable: {', '.join(MASKS)} (default: the first two).")] = None,
     method: Annotated[list[str] | None, typer.Option(
-        help="Method, repeatable (default: every method).")] = None,
+        help=f"Method, repeatable: {', '.join(METHODS.names())} (default: every method).")
+    ] = None,
     seed: Annotated[int, typer.Option(help="Seed of the random-gaps mask.")] = 0,
     out_dir: Annotated[Path | None, typer.Option(
         "--out", help="Also write gapfill_eval.parquet and the charts to this folder.")] = None,

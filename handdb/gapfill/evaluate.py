@@ -34,7 +34,8 @@ from handdb.gapfill.masks import (
     random_gaps_mask,
     thesis_table_4_2_mask,
 )
-from handdb.gapfill.registry import METHODS, fill_gaps
+from handdb.gapfill.methods import METHODS
+from handdb.gapfill.registry import fill_gaps
 from handdb.hand.skeletons import Skeleton
 from handdb.store import tables
 

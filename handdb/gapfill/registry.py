@@ -1,4 +1,4 @@
-"""The gap-filling method registry and :func:`fill_gaps`, the one entry point.
+"""What a gap-filling method returns, and :func:`fill_gaps`, the one entry point.
 
 A method is a function ``(uv, missing, skeleton, **params) -> MethodOutput``: ``uv`` is a
 ``(T, J, 2)`` copy of the tracks with NaN at every missing point, ``missing`` the
@@ -10,15 +10,14 @@ point was filled by what.
 
 from __future__ import annotations
 
-from collections.abc import Callable
 from dataclasses import dataclass, replace
 
 import numpy as np
 
 from handdb.clip import IMAGES, SAMPLINGS, VIDEO
 from handdb.gapfill.gaps import find_gaps, mask_points
+from handdb.gapfill.methods import DEFAULT_METHOD, METHODS, MethodInfo
 from handdb.hand.skeletons import Skeleton
-from handdb.registry import Registry
 
 #: Flag kinds. A gap at the start of the clip (the joint is missing in the first frame).
 LEADING = "leading"
@@ -30,14 +29,6 @@ WHOLE_CLIP = "whole_clip"
 SHORT_HISTORY = "short_history"
 #: Missing points the method left unfilled (NaN).
 UNFILLED = "unfilled"
-
-#: The method :func:`fill_gaps` uses unless told otherwise.
-DEFAULT_METHOD = "auto"
-
-#: Family of the five methods of the thesis (causal extrapolation).
-THESIS = "thesis"
-#: Family of the offline methods (frames after a gap are known).
-OFFLINE = "offline"
 
 
 @dataclass(frozen=True)
@@ -76,19 +67,6 @@ class MethodOutput:
     flags: tuple[GapFlag, ...] = ()
 
 
-GapFiller = Callable[..., MethodOutput]
-
-
-@dataclass(frozen=True)
-class MethodInfo:
-    """A registered method: its name, function, family and a one-line summary."""
-
-    name: str
-    fill: GapFiller
-    family: str
-    summary: str
-
-
 @dataclass(frozen=True)
 class FillResult:
     """The result of :func:`fill_gaps`.
@@ -117,15 +95,6 @@ class FillResult:
     def flags_of(self, kind: str) -> tuple[GapFlag, ...]:
         """Return the flags of one kind."""
         return tuple(f for f in self.flags if f.kind == kind)
-
-
-#: Every gap-filling method by name, filled in :mod:`handdb.gapfill`.
-METHODS: Registry[MethodInfo] = Registry("gap-filling method")
-
-
-def method_names(family: str | None = None) -> tuple[str, ...]:
-    """Names of the registered methods, of one family or of all, in registration order."""
-    return tuple(info.name for info in METHODS.values() if family in (None, info.family))
 
 
 def _edge_flags(missing: np.ndarray, skeleton: Skeleton) -> list[GapFlag]:

@@ -32,7 +32,7 @@ from handdb.gapfill.evaluate import (
     plot_masks,
     rmse_markdown,
 )
-from handdb.gapfill.registry import DEFAULT_METHOD, METHODS, THESIS
+from handdb.gapfill.methods import DEFAULT_METHOD, METHODS, THESIS
 from handdb.ingest.inbox import ClipEntry, load_clip
 from handdb.store import tables
 from handdb.store.clips import stored_clip

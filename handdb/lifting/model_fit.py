@@ -34,11 +34,12 @@ from handdb.hand.model import (
 )
 from handdb.hand.shape import mean_shape
 from handdb.hand.skeletons import Skeleton
+from handdb.lifting.methods import MODEL_FIT
 from handdb.lifting.result import LiftResult
 from handdb.markers.solve import MARKER_WEIGHT, MAX_EVALUATIONS, SMOOTHNESS_WEIGHT, SOLVER_TOLERANCE
 
 #: Name of the method in the lifting registry.
-METHOD = "model-fit"
+METHOD = MODEL_FIT
 
 #: Cut-off of the robust reprojection term, pixels (the 2D counterpart of eq. 4's 8 mm).
 REPROJECTION_CUTOFF_PX = 8.0

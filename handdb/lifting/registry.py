@@ -1,4 +1,4 @@
-"""The lifting methods by name, and :func:`lift`, the one entry point."""
+"""The signature of a lifting method, and :func:`lift`, the one entry point."""
 
 from __future__ import annotations
 
@@ -10,11 +10,8 @@ from handdb.checks import check_hand
 from handdb.clip import SAMPLINGS, VIDEO, Camera
 from handdb.errors import BoneLengthError
 from handdb.hand.skeletons import Skeleton
+from handdb.lifting.methods import DEFAULT_METHOD, METHODS
 from handdb.lifting.result import LiftResult
-from handdb.registry import Registry
-
-#: Method used when a clip's sidecar names none.
-DEFAULT_METHOD = "kinematic"
 
 
 class LiftMethod(Protocol):
@@ -23,15 +20,6 @@ class LiftMethod(Protocol):
     def __call__(self, uv: np.ndarray, skeleton: Skeleton, bone_lengths: np.ndarray,
                  camera: Camera, *, hand: str) -> LiftResult:
         """Lift ``uv`` to 3D; see :func:`lift` (a method may take parameters of its own)."""
-
-
-#: Every lifting method by name, filled in :mod:`handdb.lifting`.
-METHODS: Registry[LiftMethod] = Registry("lifting method")
-
-
-def available_methods() -> tuple[str, ...]:
-    """Names of the registered lifting methods, sorted."""
-    return tuple(sorted(METHODS))
 
 
 def _check_inputs(uv: np.ndarray, skeleton: Skeleton, bone_lengths: np.ndarray,
@@ -76,7 +64,7 @@ def lift(
     camera
         ``orthographic`` (scale unknown) or ``pinhole`` (intrinsics in pixels).
     method
-        A name from :func:`available_methods`.
+        A name from :func:`~handdb.lifting.methods.available_methods`.
     hand
         ``"right"`` or ``"left"``: which hand the clip shows.
     sampling

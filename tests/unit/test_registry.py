@@ -48,3 +48,12 @@ def test_the_inbox_knows_xray_files_without_importing_their_reader(tmp_path):
     out = subprocess.run([sys.executable, "-c", code, str(tmp_path)], capture_output=True,
                          text=True, check=True).stdout
     assert out.strip() == "['xray']"
+
+
+def test_a_lazy_entry_is_the_function_it_names():
+    from handdb.gapfill.rigid import fill_rigid
+    from handdb.lifting.kinematic import lift_kinematic
+
+    assert LIFTING["kinematic"].function is lift_kinematic
+    assert GAP_FILLING["rigid"].fill.function is fill_rigid
+    assert GAP_FILLING["pchip"].fill.function.__name__ == "fill_pchip"
