@@ -3,10 +3,11 @@
 :class:`handdb.build.Build` plans the build, stores the X-ray tables and, at the end, writes
 the quarantine table and the run record; each clip to process is one task,
 ``process <clip_id>``, that runs :func:`handdb.build.process_clip` (every stage and the
-commit). Tasks are submitted in windows of a few clips so memory is bounded by the largest
-clips in flight. A task is retried only on I/O errors; refused input comes back as a value
-and ends in the ``quarantine`` table. The flow publishes the build summary and each
-validated clip's depth errors as markdown artifacts.
+commit). At most ``window`` tasks are in flight, a new one submitted as each finishes
+(:func:`handdb.build.window.sliding_window`), so memory is bounded by the largest clips in
+flight and a slow clip holds back no other. A task is retried only on I/O errors; refused
+input comes back as a value and ends in the ``quarantine`` table. The flow publishes the
+build summary and each validated clip's depth errors as markdown artifacts.
 """
 
 from __future__ import annotations
@@ -18,7 +19,7 @@ from typing import Any, cast
 from prefect import flow, get_run_logger, task
 from prefect.artifacts import create_markdown_artifact
 from prefect.cache_policies import NO_CACHE
-from prefect.futures import PrefectFuture, wait
+from prefect.futures import PrefectFuture, as_completed
 from prefect.task_runners import TaskRunner, ThreadPoolTaskRunner
 from threadpoolctl import threadpool_limits
 
@@ -36,11 +37,12 @@ from handdb.build import (
     summary_markdown,
 )
 from handdb.build.stages import ClipResult
+from handdb.build.window import IN_FLIGHT_PER_WORKER, sliding_window
 from handdb.store import Store
 from handdb.store.quarantine import Refusal
 
 #: Clips in flight per worker; bounds memory and the thread pool's queue.
-WINDOW_PER_WORKER = 2
+WINDOW_PER_WORKER = IN_FLIGHT_PER_WORKER
 
 
 def _retry_on_io(task: Any, task_run: Any, state: Any) -> bool:
@@ -118,17 +120,15 @@ def build(inbox: str, db: str, gap_fill: str | None = None, lift: str | None = N
         for repair in run.summary.repairs:
             logger.warning("repaired %s", repair)
         context, todo = run.context, run.todo
-        for start in range(0, len(todo), max(1, window)):
-            items = todo[start:start + max(1, window)]
-            futures = [process.submit(item, context) for item in items]
-            wait(futures)
-            for item, future in zip(items, futures, strict=True):
-                outcome = _outcome(future)
-                if isinstance(outcome, StageFailed):
-                    logger.error("clip %s failed: %s", item.clip_id, outcome)
-                elif isinstance(outcome, Refusal):
-                    logger.warning("clip %s refused: %s", item.clip_id, outcome)
-                run.record(item.clip_id, outcome)
+        finished = sliding_window(todo, window, lambda item: process.submit(item, context),
+                                  lambda futures: next(as_completed(list(futures))))
+        for item, future in finished:
+            outcome = _outcome(future)
+            if isinstance(outcome, StageFailed):
+                logger.error("clip %s failed: %s", item.clip_id, outcome)
+            elif isinstance(outcome, Refusal):
+                logger.warning("clip %s refused: %s", item.clip_id, outcome)
+            run.record(item.clip_id, outcome)
         summary = run.finish()
     create_markdown_artifact(markdown=summary_markdown(summary), key="handdb-build",
                              description="handdb build summary")

@@ -14,7 +14,7 @@ from __future__ import annotations
 import json
 import time
 import uuid
-from concurrent.futures import ThreadPoolExecutor
+from concurrent.futures import ThreadPoolExecutor, as_completed
 from dataclasses import dataclass, field
 from datetime import UTC, datetime
 from pathlib import Path
@@ -27,6 +27,7 @@ from handdb.build.options import BuildOptions
 from handdb.build.plan import BuildPlan, PlannedClip, plan_build
 from handdb.build.process import BuildContext, StageFailed, process_clip
 from handdb.build.stages import ClipResult
+from handdb.build.window import IN_FLIGHT_PER_WORKER, sliding_window
 from handdb.store import tables
 from handdb.store.database import Store
 from handdb.store.quarantine import Refusal
@@ -182,6 +183,9 @@ def build_in_process(inbox: str | Path, db: str, options: BuildOptions | None = 
                      ) -> BuildSummary:
     """Build ``db`` from ``inbox`` in this process, ``workers`` clips at a time.
 
+    A clip starts as soon as another finishes (:func:`~handdb.build.window.sliding_window`)
+    and is recorded as it finishes, so a slow clip holds back no other.
+
     ``plan`` is a plan made a moment before (:func:`~handdb.build.plan.plan_build`).
 
     Raises
@@ -196,9 +200,12 @@ def build_in_process(inbox: str | Path, db: str, options: BuildOptions | None = 
         build = Build.begin(str(inbox), db, options, plan=plan)
         context = build.context
         with ThreadPoolExecutor(max_workers=max(1, workers)) as pool:
-            outcomes = pool.map(lambda item: run_clip(item, context), build.todo)
-            for item, outcome in zip(build.todo, outcomes, strict=True):
-                build.record(item.clip_id, outcome)
+            finished = sliding_window(
+                build.todo, max(1, workers) * IN_FLIGHT_PER_WORKER,
+                lambda item: pool.submit(run_clip, item, context),
+                lambda futures: next(as_completed(futures)))
+            for item, future in finished:
+                build.record(item.clip_id, future.result())
         return build.finish()
 
 
