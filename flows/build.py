@@ -13,6 +13,7 @@ build summary and each validated clip's depth errors as markdown artifacts.
 from __future__ import annotations
 
 import re
+from collections.abc import Collection
 from contextlib import nullcontext
 from typing import Any, cast
 
@@ -79,6 +80,17 @@ def process(item: PlannedClip, context: BuildContext) -> ClipResult | Refusal:
     return outcome
 
 
+def _first_done(futures: Collection[PrefectFuture]) -> PrefectFuture:
+    """The first of ``futures`` to finish, with its final state.
+
+    ``wait`` keeps the state the task ended in; without it, ``state`` asks the server,
+    which may not have recorded the end yet.
+    """
+    future = next(as_completed(list(futures)))
+    future.wait()
+    return future
+
+
 def _outcome(future: PrefectFuture) -> ClipResult | Refusal | StageFailed:
     """The task's value, or the stage failure that ended it."""
     state = future.state
@@ -121,7 +133,7 @@ def build(inbox: str, db: str, gap_fill: str | None = None, lift: str | None = N
             logger.warning("repaired %s", repair)
         context, todo = run.context, run.todo
         finished = sliding_window(todo, window, lambda item: process.submit(item, context),
-                                  lambda futures: next(as_completed(list(futures))))
+                                  _first_done)
         for item, future in finished:
             outcome = _outcome(future)
             if isinstance(outcome, StageFailed):
