@@ -139,7 +139,8 @@ def build(inbox: str, db: str, gap_fill: str | None = None, lift: str | None = N
             if isinstance(outcome, StageFailed):
                 logger.error("clip %s failed: %s", item.clip_id, outcome)
             elif isinstance(outcome, Refusal):
-                logger.warning("clip %s refused: %s", item.clip_id, outcome)
+                # the summary and the quarantine report it; a warning would print it twice
+                logger.info("clip %s refused: %s", item.clip_id, outcome)
             run.record(item.clip_id, outcome)
         summary = run.finish()
     create_markdown_artifact(markdown=summary_markdown(summary), key="handdb-build",

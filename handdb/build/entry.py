@@ -8,6 +8,7 @@ once when there is nothing to do, and otherwise runs the clips on the chosen run
 
 from __future__ import annotations
 
+import time
 from pathlib import Path
 
 from handdb.build.options import BuildOptions
@@ -21,6 +22,13 @@ from handdb.build.plan import plan_build
 from handdb.build.run import DEFAULT_WORKERS, BuildSummary, build_in_process
 from handdb.errors import InputError
 from handdb.store.database import Store
+
+#: The key of :attr:`BuildSummary.timings` holding the wall time of the whole
+#: :func:`run_build`, seconds: planning, starting and stopping the orchestrator (its
+#: temporary server takes most of it) and the clips. The ``runs`` row's timings, written
+#: before it ends, hold the build's own work only: ``scan`` (planning inside the build) and
+#: ``clips`` (every clip, start to last commit).
+TOTAL = "total"
 
 
 def run_build(inbox: str | Path, db: str, options: BuildOptions | None = None, *,
@@ -42,6 +50,11 @@ def run_build(inbox: str | Path, db: str, options: BuildOptions | None = None, *
     address
         The runner's cluster, for runners that take one (Dask's scheduler address).
 
+    Returns
+    -------
+    BuildSummary
+        What the build did; its ``timings[TOTAL]`` is this call's wall time.
+
     Raises
     ------
     UnknownNameError
@@ -51,6 +64,7 @@ def run_build(inbox: str | Path, db: str, options: BuildOptions | None = None, *
     DatabaseLockedError
         If another build holds the database.
     """
+    clock = time.perf_counter()
     options = (options or BuildOptions()).check()
     check_runner(runner)
     if not Path(inbox).is_dir():
@@ -62,9 +76,13 @@ def run_build(inbox: str | Path, db: str, options: BuildOptions | None = None, *
             # The lock is held from before the plan to the end of the orchestrator's run:
             # a second build is refused here, with the library's message, before the
             # orchestrator starts (inside a Prefect flow the refusal is an ERROR log).
-            return runner_orchestrator(runner).build(str(inbox), db, options,
-                                                     runner=runner, workers=workers,
-                                                     address=address, locked=True)
+            summary = runner_orchestrator(runner).build(str(inbox), db, options,
+                                                        runner=runner, workers=workers,
+                                                        address=address, locked=True)
+            summary.timings[TOTAL] = time.perf_counter() - clock
+            return summary
     # Without a clip to process, what is left (the X-ray tables, the quarantine, the run
     # record) takes milliseconds here and seconds to start an orchestrator for.
-    return build_in_process(inbox, db, options, workers=workers, plan=plan)
+    summary = build_in_process(inbox, db, options, workers=workers, plan=plan)
+    summary.timings[TOTAL] = time.perf_counter() - clock
+    return summary

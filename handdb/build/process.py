@@ -125,7 +125,7 @@ def process_clip(item: PlannedClip, context: BuildContext) -> ClipResult | Refus
         start = MARKER_FIT_STAGES[0]
     stage = start
     try:
-        progress.advance(clip_id, stage)
+        progress.started(clip_id, stage)
         if start == STAGES[0]:
             result = ClipResult(clip=ingest(item.entry, item.content_hash), keys=item.keys)
         else:
@@ -134,10 +134,10 @@ def process_clip(item: PlannedClip, context: BuildContext) -> ClipResult | Refus
         for stage in STAGES[STAGES.index(start):]:
             if stage == STAGES[0]:
                 continue
-            progress.advance(clip_id, stage)
+            progress.started(clip_id, stage)
             result = runners[stage](result)
         stage = "commit"
-        progress.advance(clip_id, stage)
+        progress.started(clip_id, stage)
         context.store.commit_clip(clip_id, clip_tables(result, Path(context.inbox)))
     except ClipRefused as refused:
         return _refusal(refused, clip_id, str(item.entry.sidecar), stage)

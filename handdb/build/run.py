@@ -106,7 +106,7 @@ class Build:
         summary.timings["scan"] = time.perf_counter() - clock
         progress.expect(len(plan.clips))
         for clip in plan.unchanged:
-            progress.advance(clip.clip_id, "unchanged")
+            progress.finished(clip.clip_id, progress.UNCHANGED)
         return cls(plan=plan, summary=summary, started=started)
 
     @property
@@ -125,11 +125,11 @@ class Build:
         summary = self.summary
         if isinstance(outcome, StageFailed):
             summary.failed[clip_id] = str(outcome)
-            progress.advance(clip_id, "failed")
+            progress.finished(clip_id, progress.FAILED)
         elif isinstance(outcome, Refusal):
             summary.refusals.append(outcome)
             self._clip_refusals.append(outcome)
-            progress.advance(clip_id, "refused")
+            progress.finished(clip_id, progress.REFUSED)
         else:
             summary.processed.append(clip_id)
             summary.n_frames += outcome.clip.n_frames
@@ -137,7 +137,7 @@ class Build:
                 summary.validation[clip_id] = clip_summary(outcome.validation)
             if outcome.verdict is not None and outcome.verdict.flagged:
                 summary.flagged[clip_id] = outcome.verdict.reasons
-            progress.advance(clip_id, "done")
+            progress.finished(clip_id, progress.DONE)
 
     def finish(self) -> BuildSummary:
         """Write the ``quarantine`` table (when it changed) and the ``runs`` row."""

@@ -19,7 +19,6 @@ from typing import Annotated, Any
 import typer
 from rich.console import Console
 from rich.markup import escape
-from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
 from handdb.build.orchestrators import DEFAULT_RUNNER, runner_names
 from handdb.errors import DamagedFileWarning, HanddbError, UnknownNameError
@@ -127,23 +126,6 @@ class OutputFormat(StrEnum):
     json = "json"
 
 
-class ClipProgress:
-    """A rich progress bar over the clips of a build."""
-
-    def __init__(self, progress: Progress) -> None:
-        self._progress = progress
-        self._task = progress.add_task("clips", total=None)
-
-    def expect(self, n_clips: int) -> None:
-        """Size the bar to ``n_clips``."""
-        self._progress.update(self._task, total=n_clips)
-
-    def advance(self, clip_id: str, stage: str) -> None:
-        """Move the bar when a clip is done, however it ended."""
-        if stage in ("commit", "unchanged", "refused", "failed"):
-            self._progress.update(self._task, advance=1, description=f"{stage} {clip_id}")
-
-
 def one_of(names: tuple[str, ...]) -> str:
     """The choices of an option, for its help: ``"one of: a, b, c"``.
 
@@ -159,17 +141,38 @@ def print_error(error: Exception, label: str = "error") -> None:
 
 
 def run_build(inbox: str, db: str, options=None, *, workers: int = 4,
-              runner: str = "thread", dask_address: str | None = None, quiet: bool = False):
-    """Run the build (:func:`handdb.build.run_build`) with a progress bar; return its summary."""
+              runner: str = DEFAULT_RUNNER, dask_address: str | None = None,
+              quiet: bool = False):
+    """Run the build (:func:`handdb.build.run_build`) showing its progress; return its summary.
+
+    On a terminal the progress is a live display, elsewhere one line per event
+    (:mod:`handdb.cli.progress`); ``quiet`` shows none.
+    """
     from handdb.build import progress as build_progress
     from handdb.build import run_build as build_database
+    from handdb.cli.progress import build_reporter
 
-    columns = (TextColumn("[bold]{task.description}"), BarColumn(), MofNCompleteColumn(),
-               TimeElapsedColumn())
-    with Progress(*columns, console=console, transient=True, disable=quiet) as bar:
-        with build_progress.reporting(ClipProgress(bar)):
-            return build_database(inbox, db, options, runner=runner, workers=workers,
-                                  address=dask_address)
+    if quiet:
+        return build_database(inbox, db, options, runner=runner, workers=workers,
+                              address=dask_address)
+    with build_reporter(console) as reporter, build_progress.reporting(reporter):
+        return build_database(inbox, db, options, runner=runner, workers=workers,
+                              address=dask_address)
+
+
+def _timing(timings: dict[str, float]) -> str:
+    """The wall time of the whole build, beside the part of it spent in the clips.
+
+    ``timings`` holds ``total`` (the whole build: planning, starting and stopping Prefect,
+    the clips) and ``scan`` and ``clips``, the build's own work inside it
+    (:data:`handdb.build.entry.TOTAL`).
+    """
+    from handdb.build.entry import TOTAL
+
+    if TOTAL not in timings:
+        return ""
+    work = timings.get("scan", 0.0) + timings.get("clips", 0.0)
+    return f" in {timings[TOTAL]:.1f} s ({work:.1f} s planning and processing clips)"
 
 
 def print_summary(summary) -> None:
@@ -179,7 +182,7 @@ def print_summary(summary) -> None:
         f"{len(summary.processed)} processed ({summary.n_frames} frames), "
         f"{len(summary.unchanged)} unchanged, "
         f"{len(summary.refusals)} refused, {len(summary.flagged)} flagged, "
-        f"{len(summary.failed)} failed ({sum(summary.timings.values()):.1f} s)",
+        f"{len(summary.failed)} failed{_timing(summary.timings)}",
         soft_wrap=True,
     )
     for repair in summary.repairs:
