@@ -65,8 +65,8 @@ def eta_seconds(elapsed: float, n_done: int, n_left: int) -> float | None:
     elapsed
         Seconds since the first clip started processing (start-up before it excluded).
     n_done
-        Clips processed so far (refused and failed ones included; unchanged clips, which
-        cost a hash, are not).
+        Clips that ran every stage so far (unchanged clips, which cost a hash, and refused
+        ones, most stopped at their first stage, would make the pace too quick).
     n_left
         Clips still to process.
 

@@ -12,7 +12,7 @@ import contextlib
 import threading
 import time
 from collections.abc import Callable, Iterator
-from typing import TextIO
+from typing import IO
 
 from rich.console import Console
 from rich.progress import BarColumn, Progress, TaskID, TextColumn, TimeElapsedColumn
@@ -52,7 +52,8 @@ class Tally:
         self._lock = threading.Lock()
         self.n_clips = 0
         self.n_through = 0
-        self.n_unchanged = 0
+        #: Clips that ran every stage (done or failed): the pace of the ETA.
+        self.n_paced = 0
         self.first_start: float | None = None
         #: Clip id -> the stage it is in.
         self.in_flight: dict[str, str] = {}
@@ -73,14 +74,13 @@ class Tally:
         with self._lock:
             self.in_flight.pop(clip_id, None)
             self.n_through += 1
-            self.n_unchanged += outcome == progress.UNCHANGED
+            self.n_paced += outcome in (progress.DONE, progress.FAILED)
 
     def eta(self) -> float | None:
         """Seconds left at the pace of the clips processed so far (``None``: no pace yet)."""
         if self.first_start is None:
             return None
-        return progress.eta_seconds(self._clock() - self.first_start,
-                                    self.n_through - self.n_unchanged,
+        return progress.eta_seconds(self._clock() - self.first_start, self.n_paced,
                                     self.n_clips - self.n_through)
 
     def status(self) -> str:
@@ -133,7 +133,7 @@ class LineProgress:
     not listed (there may be thousands; the summary counts them).
     """
 
-    def __init__(self, stream: TextIO, tally: Tally,
+    def __init__(self, stream: IO[str], tally: Tally,
                  clock: Callable[[], float] = time.monotonic) -> None:
         self._stream = stream
         self._tally = tally

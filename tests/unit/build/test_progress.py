@@ -47,20 +47,23 @@ def test_durations_read_as_a_person_says_them():
     assert [duration(s) for s in (4.4, 65, 3725)] == ["4 s", "1 min 05 s", "1 h 02 min"]
 
 
-def test_the_tally_counts_unchanged_clips_as_through_but_not_as_pace():
+def test_the_tally_counts_unchanged_and_refused_clips_as_through_but_not_as_pace():
     clock = Clock()
     tally = Tally(clock)
-    tally.expect(5)
+    tally.expect(6)
     tally.finished("old", progress.UNCHANGED)
-    assert tally.eta() is None and tally.status() == "1/5 clips"
+    assert tally.eta() is None and tally.status() == "1/6 clips"
     tally.started("a", "ingest")
+    tally.started("bad", "ingest")
+    tally.finished("bad", progress.REFUSED)
+    assert tally.eta() is None
     clock.now += 10.0
     tally.started("a", "lift")
     assert tally.in_flight == {"a": "lift"}
     tally.finished("a", progress.DONE)
     # One clip processed in 10 s, three to go: 30 s.
     assert tally.eta() == pytest.approx(30.0)
-    assert tally.status() == "2/5 clips, about 30 s left"
+    assert tally.status() == "3/6 clips, about 30 s left"
 
 
 def test_plain_lines_name_the_stage_in_flight_and_carry_no_escape_codes():
