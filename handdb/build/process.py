@@ -64,7 +64,17 @@ STAGE_WORK: dict[str, str] = {
     "ingest": "reading the clip's files", "lengths": "estimating bone lengths",
     "gap_fill": "gap filling", "lift": "lifting to 3D", "validate": "validation",
     "export": "writing its USD and previews", "commit": "storing its tables",
+    "model_fit": "fitting the hand model to its markers",
 }
+
+#: What progress calls a marker clip's bone-length stage, which is its whole model fit
+#: (:data:`~handdb.build.keys.MARKER_FIT_STAGES`), the longest stage of any clip.
+MODEL_FIT_PROGRESS = "model_fit"
+
+
+def _progress_stage(item: PlannedClip, stage: str) -> str:
+    """The name progress shows for ``stage`` of ``item``."""
+    return MODEL_FIT_PROGRESS if item.markers and stage == MARKER_FIT_STAGES[0] else stage
 
 
 def _refusal(refused: ClipRefused, clip_id: str, sidecar: str, stage: str) -> Refusal:
@@ -125,7 +135,7 @@ def process_clip(item: PlannedClip, context: BuildContext) -> ClipResult | Refus
         start = MARKER_FIT_STAGES[0]
     stage = start
     try:
-        progress.started(clip_id, stage)
+        progress.started(clip_id, _progress_stage(item, stage))
         if start == STAGES[0]:
             result = ClipResult(clip=ingest(item.entry, item.content_hash), keys=item.keys)
         else:
@@ -134,7 +144,7 @@ def process_clip(item: PlannedClip, context: BuildContext) -> ClipResult | Refus
         for stage in STAGES[STAGES.index(start):]:
             if stage == STAGES[0]:
                 continue
-            progress.started(clip_id, stage)
+            progress.started(clip_id, _progress_stage(item, stage))
             result = runners[stage](result)
         stage = "commit"
         progress.started(clip_id, stage)

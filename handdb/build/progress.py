@@ -30,7 +30,10 @@ class Reporter(Protocol):
         """The build will go through ``n_clips`` clips."""
 
     def started(self, clip_id: str, stage: str) -> None:
-        """``clip_id`` starts ``stage`` (a key of :data:`handdb.build.process.STAGE_WORK`)."""
+        """``clip_id`` starts ``stage``, a key of :data:`handdb.build.process.STAGE_WORK`.
+
+        A marker clip's model fit, which stands for three stages, is ``model_fit``.
+        """
 
     def finished(self, clip_id: str, outcome: str) -> None:
         """``clip_id`` ended: ``outcome`` is DONE, UNCHANGED, REFUSED or FAILED."""

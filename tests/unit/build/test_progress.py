@@ -117,3 +117,22 @@ def test_a_build_reports_each_stage_as_it_starts(tmp_path, write_clip):
         *(("started", "alpha", stage) for stage in (*STAGES, "commit")),
         ("finished", "alpha", progress.DONE),
     ]
+
+
+@pytest.mark.slow
+def test_a_marker_clip_shows_its_model_fit_in_flight(tmp_path, dhg_sample):
+    import json
+    import shutil
+
+    from tests.unit.ingest.test_real_tools import SIDECAR_3D
+
+    inbox = tmp_path / "inbox"
+    inbox.mkdir()
+    shutil.copy(dhg_sample, inbox / "dhg.dhg.txt")
+    (inbox / "dhg.clip.json").write_text(json.dumps(SIDECAR_3D | {"skeleton": "dhg22"}))
+    recorder = Recorder()
+    with progress.reporting(recorder):
+        build_in_process(inbox, str(tmp_path / "db"), BuildOptions(export_usd=False))
+    stages = [event[2] for event in recorder.events if event[0] == "started"]
+    assert stages[:2] == ["ingest", "model_fit"] and "lengths" not in stages
+    assert recorder.events[-1] == ("finished", "dhg", progress.DONE)
