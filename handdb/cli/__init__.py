@@ -20,7 +20,7 @@ import typer
 from rich.console import Console
 from rich.markup import escape
 
-from handdb.build.orchestrators import DEFAULT_RUNNER, runner_names
+from handdb.build.orchestrators import DEFAULT_RUNNER, check_runner, runner_names
 from handdb.errors import DamagedFileWarning, HanddbError, UnknownNameError
 from handdb.gapfill import DEFAULT_METHOD as DEFAULT_GAP_FILL
 from handdb.gapfill import METHODS as GAP_FILLING
@@ -228,6 +228,10 @@ def build(
     options = BuildOptions(gap_fill=gap_fill, lift=lift, export_usd=usd,
                            compare=tuple(compare or ()))
     try:
+        # checked here, before the stages are imported (seconds), so a mistyped name
+        # answers at once; run_build checks again for callers of the library
+        options.check()
+        check_runner(runner)
         summary = run_build(inbox, db, options, workers=workers, runner=runner,
                             dask_address=dask_address)
     except HanddbError as exc:

@@ -60,3 +60,30 @@ def test_a_prefect_build_prints_a_refusal_once_and_its_wall_time(inbox_with_a_re
     total, work = timing(output)
     # The wall time holds Prefect's temporary server starting and stopping.
     assert total > work
+
+
+CHECK_PROBE = """
+import sys
+from handdb.cli import main
+sys.argv = ["handdb", "build", "--inbox", {inbox!r}, "--db", {db!r}, {option!r}, "bogus"]
+try:
+    main()
+except SystemExit as exit:
+    print("STATUS:", exit.code)
+print("LOADED:", ",".join(m for m in ("handdb.build.stages", "numba", "prefect")
+                          if m in sys.modules))
+"""
+
+
+@pytest.mark.parametrize("option, kind", [("--lift", "lifting method"),
+                                          ("--gap-fill", "gap-filling method"),
+                                          ("--runner", "runner")])
+def test_a_mistyped_name_is_refused_before_the_stages_load(tmp_path, option, kind):
+    (tmp_path / "inbox").mkdir()
+    code = CHECK_PROBE.format(inbox=str(tmp_path / "inbox"), db=str(tmp_path / "db"),
+                              option=option)
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                          check=True)
+    assert f"unknown {kind} 'bogus'; known: " in done.stderr
+    assert "STATUS: 1" in done.stdout and "LOADED: \n" in done.stdout
+    assert not (tmp_path / "db").exists()
