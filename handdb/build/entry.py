@@ -70,19 +70,23 @@ def run_build(inbox: str | Path, db: str, options: BuildOptions | None = None, *
     if not Path(inbox).is_dir():
         raise InputError(inbox, "is not a folder: create it and put clips in it, or pass "
                          "--inbox (or set HANDDB_INBOX)", field="inbox")
+    summary = _dispatch(inbox, db, options, runner=runner, workers=workers, address=address)
+    summary.timings[TOTAL] = time.perf_counter() - clock
+    return summary
+
+
+def _dispatch(inbox: str | Path, db: str, options: BuildOptions, *, runner: str,
+              workers: int, address: str | None) -> BuildSummary:
+    """Plan under the database lock and run the clips where :func:`run_build` says."""
     with Store(db).lock():
         plan = plan_build(inbox, db, options)
         if plan.todo and runner != LOCAL_RUNNER:
             # The lock is held from before the plan to the end of the orchestrator's run:
             # a second build is refused here, with the library's message, before the
             # orchestrator starts (inside a Prefect flow the refusal is an ERROR log).
-            summary = runner_orchestrator(runner).build(str(inbox), db, options,
-                                                        runner=runner, workers=workers,
-                                                        address=address, locked=True)
-            summary.timings[TOTAL] = time.perf_counter() - clock
-            return summary
+            return runner_orchestrator(runner).build(str(inbox), db, options,
+                                                     runner=runner, workers=workers,
+                                                     address=address, locked=True)
     # Without a clip to process, what is left (the X-ray tables, the quarantine, the run
     # record) takes milliseconds here and seconds to start an orchestrator for.
-    summary = build_in_process(inbox, db, options, workers=workers, plan=plan)
-    summary.timings[TOTAL] = time.perf_counter() - clock
-    return summary
+    return build_in_process(inbox, db, options, workers=workers, plan=plan)
