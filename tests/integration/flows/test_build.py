@@ -121,11 +121,11 @@ def test_the_lock_is_held_from_the_plan_to_the_end_of_the_flow(inbox, tmp_path,
     # refused inside its own flow run, with an ERROR log from Prefect
     from handdb_flows.orchestrator import PrefectOrchestrator
 
-    import handdb.build
+    import handdb.build.entry
 
     db = tmp_path / "db"
     seen = []
-    plan, orchestrated = handdb.build.plan_build, PrefectOrchestrator.build
+    plan, orchestrated = handdb.build.entry.plan_build, PrefectOrchestrator.build
 
     def planning(*args, **kwargs):
         seen.append(("plan", _held(db)))
@@ -135,7 +135,8 @@ def test_the_lock_is_held_from_the_plan_to_the_end_of_the_flow(inbox, tmp_path,
         seen.append(("orchestrator", _held(db), kwargs["locked"]))
         return orchestrated(self, *args, **kwargs)
 
-    monkeypatch.setattr(handdb.build, "plan_build", planning)
+    # run_build (handdb.build.entry) plans with the plan_build it imported
+    monkeypatch.setattr(handdb.build.entry, "plan_build", planning)
     monkeypatch.setattr(PrefectOrchestrator, "build", orchestrating)
     summary = build(inbox, db)
     assert summary.ok and len(summary.processed) == 3
