@@ -5,7 +5,8 @@ Layout of the exported stage (``<Hand>`` is ``RightHand`` or ``LeftHand``)::
     /<Hand>            SkelRoot (default prim; customData handdb:clipId, handdb:hand)
     /<Hand>/Skeleton   Skeleton: joints, bindTransforms, restTransforms;
                        SkelBindingAPI with skel:animationSource -> Animation
-    /<Hand>/Animation  SkelAnimation: translations, rotations, scales at every frame
+    /<Hand>/Animation  SkelAnimation: translations, rotations at every frame (a
+                       channel equal at every frame once, as its default), scales once
     /<Hand>/Mesh       Mesh of capsules and palm, SkelBindingAPI bound to the Skeleton
 
 Axes. handdb's 3D frame is the camera's: ``x`` right, ``y`` down, ``z`` away from the
@@ -82,23 +83,42 @@ def _set_stage_metadata(stage: Usd.Stage, n_frames: int, fps: float, units: str)
     stage.SetEndTimeCode(n_frames - 1)
 
 
+def _is_constant(values: np.ndarray) -> bool:
+    """Whether every frame of ``values`` ``(T, ...) float32`` equals the first.
+
+    Equal to float32 precision: within one epsilon of the channel's largest magnitude, so
+    round-off in a rigid bone's offset (``1e-14`` where it should be zero) does not count.
+    """
+    tolerance = np.finfo(np.float32).eps * float(np.abs(values).max())
+    return bool(np.abs(values - values[0]).max() <= tolerance)
+
+
 def _author_animation(anim: UsdSkel.Animation, motion: JointMotion) -> None:
-    """Set every channel of ``anim`` at every frame (a missing one falls back to rest)."""
-    n_frames, n_joints = motion.rotations.shape[:2]
+    """Author every channel of ``anim``: one time sample per frame, or once if constant.
+
+    A channel equal at every frame (``scales`` always; ``translations`` of a rigid hand
+    that keeps its bone lengths and does not move; any channel of a one-frame clip) is
+    written once as the attribute's default, which UsdSkel holds at every time. The others
+    get a sample at every frame: a channel with neither would fall back to the rest pose.
+    The values go straight into the layer's specs inside one change block, so the stage
+    recomposes once, not once per sample.
+    """
+    n_joints = motion.rotations.shape[1]
     xyzw = np.ascontiguousarray(np.roll(motion.rotations, -1, axis=-1), dtype=np.float32)
     translations = np.ascontiguousarray(motion.translations, dtype=np.float32)
-    scales = Vt.Vec3hArray.FromNumpy(np.ones((n_joints, 3), dtype=np.float16))
-    channels = [
-        (anim.CreateRotationsAttr().GetPath(), Vt.QuatfArray.FromNumpy, xyzw),
-        (anim.CreateTranslationsAttr().GetPath(), Vt.Vec3fArray.FromNumpy, translations),
-    ]
-    scales_path = anim.CreateScalesAttr().GetPath()
+    anim.CreateScalesAttr(Vt.Vec3hArray.FromNumpy(np.ones((n_joints, 3), dtype=np.float16)))
     layer = anim.GetPrim().GetStage().GetEditTarget().GetLayer()
+    channels = [(anim.CreateRotationsAttr(), Vt.QuatfArray.FromNumpy, xyzw),
+                (anim.CreateTranslationsAttr(), Vt.Vec3fArray.FromNumpy, translations)]
     with Sdf.ChangeBlock():
-        for frame in range(n_frames):
-            for path, to_vt, values in channels:
-                layer.SetTimeSample(path, frame, to_vt(values[frame]))
-            layer.SetTimeSample(scales_path, frame, scales)
+        # Only Sdf calls in here: Usd's API is not safe inside a change block.
+        for attribute, to_vt, values in channels:
+            path = attribute.GetPath()
+            if _is_constant(values):
+                layer.GetAttributeAtPath(path).default = to_vt(values[0])
+                continue
+            for frame, value in enumerate(map(to_vt, values)):
+                layer.SetTimeSample(path, frame, value)
 
 
 def _author_mesh(

@@ -66,9 +66,31 @@ def test_skeleton_and_animation_layout(mediapipe_motion, tmp_path):
     source = UsdSkel.BindingAPI(skel.GetPrim()).GetAnimationSourceRel()
     assert source.GetTargets() == [anim.GetPath()]
     frames = list(range(len(mediapipe_motion.xyz)))
-    for attribute in (anim.GetRotationsAttr(), anim.GetTranslationsAttr(), anim.GetScalesAttr()):
+    for attribute in (anim.GetRotationsAttr(), anim.GetTranslationsAttr()):
         assert attribute.GetTimeSamples() == frames
         assert len(attribute.Get(frames[-1])) == skeleton.n_joints
+    scales = anim.GetScalesAttr()
+    assert scales.GetTimeSamples() == []
+    np.testing.assert_array_equal(np.array(scales.Get(frames[-1])), np.ones((21, 3)))
+
+
+def test_a_constant_channel_is_written_once(mediapipe_motion, tmp_path):
+    """A hand that keeps its bone lengths and does not move has the same translations at
+    every frame: they are the attribute's default, and UsdSkel still poses every frame."""
+    skeleton, lengths = mediapipe_motion.skeleton, mediapipe_motion.bone_lengths
+    xyz = mediapipe_motion.xyz - mediapipe_motion.xyz[:, [skeleton.root]]
+    path = export(mediapipe_motion, tmp_path / "c.usda", xyz=xyz, keep_lengths=True)
+    clip = open_skeleton(path)
+    anim = UsdSkel.Animation(clip.stage.GetPrimAtPath("/RightHand/Animation"))
+    assert anim.GetTranslationsAttr().GetTimeSamples() == []
+    assert len(anim.GetRotationsAttr().GetTimeSamples()) == len(xyz)
+    stage_xyz = joint_world_positions(clip, len(xyz))
+    camera_xyz = CAMERA_TO_Y_UP.inv().apply(stage_xyz.reshape(-1, 3)).reshape(stage_xyz.shape)
+    bones = camera_xyz[:, skeleton.bones[:, 1]] - camera_xyz[:, skeleton.bones[:, 0]]
+    np.testing.assert_allclose(np.linalg.norm(bones, axis=-1),
+                               np.broadcast_to(lengths[skeleton.bones[:, 1]], bones.shape[:2]),
+                               rtol=1e-5)
+    np.testing.assert_allclose(camera_xyz[:, skeleton.root], 0.0, atol=1e-4)
 
 
 def test_mesh_skinning_matches_the_posed_hand(mediapipe_motion, tmp_path):
