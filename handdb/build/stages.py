@@ -244,7 +244,7 @@ def _put(store: Store, local: Path, *parts: str) -> str:
 
 
 def export(result: ClipResult, store: Store, options: BuildOptions) -> ClipResult:
-    """Write the clip's USD animation, preview sheet and validation chart into the database.
+    """Write the clip's USD animation, preview thumbnail and validation chart into the database.
 
     A clip with joints that could not be lifted is not exported (``usd_path`` stays null)
     and says so: the reason joins its flag reasons, the frames and joints its flagged rows.
@@ -263,8 +263,8 @@ def export(result: ClipResult, store: Store, options: BuildOptions) -> ClipResul
         verdict = result.verdict or Verdict(reasons=(), rows=np.zeros_like(unplaced))
         return replace(result, verdict=Verdict(reasons=(*verdict.reasons, reason),
                                                rows=verdict.rows | unplaced))
-    # USD and matplotlib take a second to import: a build with nothing to export skips them
-    from handdb.export.preview import write_preview_png
+    # USD takes a second to import: a build with nothing to export skips it
+    from handdb.export.thumbnail import write_thumbnail_png
     from handdb.export.usd import export_clip_usd
 
     spec = clip.spec
@@ -276,9 +276,9 @@ def export(result: ClipResult, store: Store, options: BuildOptions) -> ClipResul
                               bone_lengths=bones.lengths, fps=spec.fps,
                               units=spec.units, hand=spec.hand, rotations=rotations)
         usd_path = _put(store, usd, USD_DIR, usd.name)
-        preview = write_preview_png(scratch_dir / "preview.png", skeleton=clip.skeleton,
-                                    xyz=lifted.xyz, units=spec.units, fps=spec.fps,
-                                    title=f"{clip.clip_id} ({lifted.method})")
+        # the labelled sheet costs 15 times the thumbnail: `handdb preview` draws it
+        preview = write_thumbnail_png(scratch_dir / "preview.png", skeleton=clip.skeleton,
+                                      xyz=lifted.xyz)
         _put(store, preview, REPORTS_DIR, clip.clip_id, "preview.png")
         if result.validation is not None:
             chart = scratch_dir / "depth.png"

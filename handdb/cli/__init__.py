@@ -42,6 +42,9 @@ LAZY_COMMANDS: dict[str, tuple[str, str, str]] = {
                    "Export a clip as a UsdSkel animation with a skinned hand mesh."),
     "export-bvh": ("handdb.cli.export", "export_bvh",
                    "Export a clip's joint rotations as BVH."),
+    "preview": ("handdb.cli.preview", "preview",
+                "Draw a stored clip's labelled contact sheet as PNG (the build stores a "
+                "thumbnail)."),
     "ratios": ("handdb.cli.ratios", "app",
                "Relative phalanx lengths from X-ray images and joint placement (Chaudhry et "
                "al.)."),

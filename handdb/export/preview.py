@@ -1,15 +1,15 @@
 """A clip's preview: a PNG contact sheet of a few frames of its skeleton (matplotlib).
 
-Each column is one frame, evenly spaced over the clip; the top row is the camera's view
-(``x`` right, ``y`` down) and the bottom row a side view (depth ``z`` to the right, ``y``
-down). Bones are coloured by finger; missing joints leave gaps. Every panel shares one
-scale, so motion between frames reads at a glance and only the first panel of a row
-carries ticks.
+The sheet's layout is :mod:`handdb.export.sheet`'s. Bones are coloured by finger; missing
+joints leave gaps. Every panel shares one scale, so only the first panel of a row carries
+ticks; frames are labelled with their time and the figure with a title and a legend. The
+build draws the text-free :mod:`handdb.export.thumbnail` instead (a tenth of the cost);
+``handdb preview`` draws this sheet of a stored clip on demand.
 
-The build draws one sheet per clip, so drawing is kept cheap: each row is a single Axes
-whose panels sit side by side in data coordinates (an Axes costs more to make and draw
-than everything in it), a row's bones are one
-:class:`~matplotlib.collections.LineCollection`, and the layout is fixed in inches. The
+Drawing is kept cheap all the same: each row is a single Axes whose panels sit side by
+side in data coordinates (an Axes costs more to make and draw than everything in it), a
+row's bones are one :class:`~matplotlib.collections.LineCollection`, and the layout is
+fixed in inches. The
 figure is drawn with the Agg canvas directly (no pyplot state), so previews can be made
 from worker threads.
 """
@@ -27,16 +27,14 @@ from matplotlib.lines import Line2D
 from matplotlib.patches import Rectangle
 from matplotlib.ticker import MaxNLocator
 
+from handdb.export.sheet import (
+    DEFAULT_PREVIEW_FRAMES,
+    FINGER_COLOURS,
+    VIEWS,
+    preview_frames,
+    view_box,
+)
 from handdb.hand.skeletons import FINGERS, Skeleton
-
-#: Frames shown by default.
-DEFAULT_PREVIEW_FRAMES = 6
-
-#: Colour of each finger's bones (and of the palm's).
-FINGER_COLOURS: dict[str, str] = {
-    "thumb": "tab:red", "index": "tab:orange", "middle": "tab:green",
-    "ring": "tab:blue", "little": "tab:purple", "palm": "0.35",
-}
 
 _DPI = 100
 #: Fixed layout, inches: side of a square panel, gaps between panels, figure margins.
@@ -44,29 +42,12 @@ _PANEL = 2.0
 _COLUMN_GAP = 0.15
 _ROW_GAP = 0.5
 _LEFT, _RIGHT, _TOP, _BOTTOM = 0.75, 0.1, 0.55, 0.45
-#: Half the side of a panel, as a fraction of the largest extent of the clip's joints.
-_HALF_SPAN = 0.55
 _TICKS_PER_AXIS = 4
-_VIEWS = (("x", 0, "camera view"), ("z", 2, "side view"))
-
-
-def preview_frames(n_frames: int, count: int = DEFAULT_PREVIEW_FRAMES) -> np.ndarray:
-    """Return ``count`` frame indices evenly spaced from first to last, ``(k,) int``."""
-    return np.unique(np.linspace(0, n_frames - 1, min(count, n_frames)).round().astype(int))
-
-
-def _view_box(xyz: np.ndarray) -> tuple[np.ndarray, float]:
-    """Centre ``(3,)`` and half side of the cube every panel shows, clip units (NaN skipped)."""
-    coordinates = np.ascontiguousarray(xyz.reshape(-1, 3).T)  # (3, T * J), fast to reduce
-    low, high = np.fmin.reduce(coordinates, axis=1), np.fmax.reduce(coordinates, axis=1)
-    if not np.isfinite(low).all():
-        return np.zeros(3), _HALF_SPAN
-    return (low + high) / 2, _HALF_SPAN * max(float((high - low).max()), 1e-9)
 
 
 def _sheet(n_columns: int) -> tuple[Figure, list[Axes]]:
     """A figure with one Axes per view, each as wide as ``n_columns`` square panels."""
-    n_rows = len(_VIEWS)
+    n_rows = len(VIEWS)
     row_width = n_columns * _PANEL + (n_columns - 1) * _COLUMN_GAP
     width = _LEFT + row_width + _RIGHT
     height = _TOP + n_rows * _PANEL + (n_rows - 1) * _ROW_GAP + _BOTTOM
@@ -123,7 +104,7 @@ def write_preview_png(
     path = Path(path)
     xyz = np.asarray(xyz, dtype=np.float64)
     frames = preview_frames(len(xyz), count)
-    centre, half = _view_box(xyz)
+    centre, half = view_box(xyz)
     side = 2 * half
     pitch = side * (1 + _COLUMN_GAP / _PANEL)             # panel to panel, clip units
     panel_left = np.arange(len(frames)) * pitch           # (k,) left edge of each panel
@@ -133,7 +114,7 @@ def write_preview_png(
     colours = np.broadcast_to(bone_colours, drawn.shape)[drawn]
 
     figure, rows = _sheet(len(frames))
-    for ax, (label, axis, view) in zip(rows, _VIEWS, strict=True):
+    for ax, (label, axis, view) in zip(rows, VIEWS, strict=True):
         across = poses[..., axis] - (centre[axis] - half) + panel_left[:, None]  # (k, J)
         down = poses[..., 1]
         segments = np.stack([across[:, skeleton.bones], down[:, skeleton.bones]], axis=-1)

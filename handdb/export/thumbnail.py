@@ -1,0 +1,131 @@
+"""A clip's thumbnail: the preview's contact sheet without text, drawn with numpy.
+
+Same panels as :func:`handdb.export.preview.write_preview_png` (the layout of
+:mod:`handdb.export.sheet`: one column per frame, the camera's view above a side view,
+bones coloured by finger, joints black, missing joints leave gaps), but no title, ticks,
+labels or legend: the pixels are set in a numpy array and saved with Pillow. That costs
+a few milliseconds where matplotlib's text and tick machinery costs a fifth of a second,
+which is why the build writes this one for every clip.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+from PIL import Image
+
+from handdb.export.sheet import DEFAULT_PREVIEW_FRAMES, FINGER_RGB, VIEWS, preview_frames, view_box
+from handdb.hand.skeletons import Skeleton
+
+#: Side of a square panel, and the gap between panels and around the sheet, pixels.
+PANEL_PIXELS = 160
+GAP_PIXELS = 6
+#: Bone and joint thickness, pixels.
+BONE_PIXELS = 2
+JOINT_PIXELS = 3
+_BACKGROUND = 255
+_BORDER = (160, 160, 160)
+_JOINT = (0, 0, 0)
+
+
+def _paint(image: np.ndarray, points: np.ndarray, colours: np.ndarray, size: int) -> None:
+    """Paint a ``size`` x ``size`` square of ``colours`` ``(n, 3)`` at ``points`` ``(n, 2)``.
+
+    ``points`` are ``(column, row)`` pixel coordinates; squares are clipped to the image.
+    Where squares overlap, the later point's colour wins.
+    """
+    corner = np.rint(points).astype(np.intp) - (size - 1) // 2
+    height, width = image.shape[:2]
+    for d_row in range(size):
+        for d_column in range(size):
+            column, row = corner[:, 0] + d_column, corner[:, 1] + d_row
+            inside = (column >= 0) & (column < width) & (row >= 0) & (row < height)
+            image[row[inside], column[inside]] = colours[inside]
+
+
+def _segment_points(starts: np.ndarray, ends: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Points one pixel apart along segments ``(n, 2)``, and the segment of each point.
+
+    Returns ``(m, 2)`` pixel coordinates and ``(m,) int`` segment indices, segments in order.
+    """
+    steps = np.ceil(np.abs(ends - starts).max(axis=1)).astype(np.intp) + 1   # (n,) >= 1
+    segment = np.repeat(np.arange(len(starts)), steps)
+    first = np.repeat(np.cumsum(steps) - steps, steps)
+    fraction = (np.arange(len(segment)) - first) / np.maximum(steps[segment] - 1, 1)
+    return starts[segment] + fraction[:, None] * (ends - starts)[segment], segment
+
+
+def thumbnail_image(
+    skeleton: Skeleton, xyz: np.ndarray, count: int = DEFAULT_PREVIEW_FRAMES,
+) -> np.ndarray:
+    """Draw the contact sheet of ``count`` frames of ``xyz`` as an RGB image.
+
+    Parameters
+    ----------
+    skeleton
+        Skeleton of ``xyz``.
+    xyz
+        Joint positions, ``(T, J, 3) float64``, clip units, handdb's camera frame; NaN
+        where a joint has no position. ``T > 0``.
+    count
+        Frames to show.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(H, W, 3) uint8``: ``len(VIEWS)`` rows and ``min(count, T)`` columns of square
+        panels of :data:`PANEL_PIXELS`, :data:`GAP_PIXELS` apart.
+    """
+    xyz = np.asarray(xyz, dtype=np.float64)
+    frames = preview_frames(len(xyz), count)
+    centre, half = view_box(xyz)
+    pitch = PANEL_PIXELS + GAP_PIXELS
+    image = np.full((GAP_PIXELS + len(VIEWS) * pitch, GAP_PIXELS + len(frames) * pitch, 3),
+                    _BACKGROUND, dtype=np.uint8)
+    poses = xyz[frames]                                                     # (k, J, 3)
+    to_pixels = PANEL_PIXELS / (2 * half)
+    left = GAP_PIXELS + pitch * np.arange(len(frames))                      # (k,)
+    bone_rgb = np.array([FINGER_RGB[skeleton.fingers[child]] for child in skeleton.bones[:, 1]],
+                        dtype=np.uint8)                                     # (B, 3)
+    for row, (_, axis, _) in enumerate(VIEWS):
+        top = GAP_PIXELS + row * pitch
+        for x in left:
+            image[top - 1:top + PANEL_PIXELS + 1, [x - 1, x + PANEL_PIXELS]] = _BORDER
+            image[[top - 1, top + PANEL_PIXELS], x - 1:x + PANEL_PIXELS + 1] = _BORDER
+        across = (poses[..., axis] - (centre[axis] - half)) * to_pixels + left[:, None]
+        down = (poses[..., 1] - (centre[1] - half)) * to_pixels + top       # (k, J)
+        pixels = np.stack([across, down], axis=-1)                          # (k, J, 2)
+        ends = pixels[:, skeleton.bones]                                    # (k, B, 2, 2)
+        drawn = np.isfinite(ends).all(axis=(-2, -1))                        # (k, B)
+        points, segment = _segment_points(ends[drawn][:, 0], ends[drawn][:, 1])
+        colours = np.broadcast_to(bone_rgb, (*drawn.shape, 3))[drawn]
+        _paint(image, points, colours[segment], BONE_PIXELS)
+        joints = pixels.reshape(-1, 2)
+        placed = np.isfinite(joints).all(axis=1)
+        _paint(image, joints[placed], np.broadcast_to(np.array(_JOINT, np.uint8),
+                                                      (int(placed.sum()), 3)), JOINT_PIXELS)
+    return image
+
+
+def write_thumbnail_png(
+    path: str | Path, *, skeleton: Skeleton, xyz: np.ndarray,
+    count: int = DEFAULT_PREVIEW_FRAMES,
+) -> Path:
+    """Draw :func:`thumbnail_image` of ``xyz`` and save it as PNG at ``path``.
+
+    Parameters
+    ----------
+    path
+        Output ``.png`` file; its folder must exist.
+    skeleton, xyz, count
+        As for :func:`thumbnail_image`.
+
+    Returns
+    -------
+    pathlib.Path
+        ``path``.
+    """
+    path = Path(path)
+    Image.fromarray(thumbnail_image(skeleton, xyz, count)).save(path, format="PNG")
+    return path
