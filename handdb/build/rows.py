@@ -33,9 +33,12 @@ def joints_3d_table(result: ClipResult) -> pa.Table:
     uv = result.uv.reshape(n, 2)
     if result.fill is not None:
         filled = result.fill.filled.reshape(n)
-        fill_method = np.where(filled, result.fill.fill_method.reshape(n), np.array(None))
+        fill_codes = np.zeros(n, dtype=np.int32)
+        fill_names, fill_codes[filled] = np.unique(result.fill.fill_method.reshape(n)[filled],
+                                                   return_inverse=True)
+        fill_method = tables.labels(fill_names, fill_codes, filled)
     else:
-        filled, fill_method = np.zeros(n, dtype=bool), np.full(n, None)
+        filled, fill_method = np.zeros(n, dtype=bool), pa.nulls(n, pa.string())
     xyz = lifted.xyz.reshape(n, 3) if lifted is not None else np.full((n, 3), np.nan)
     lifted_rows = np.isfinite(xyz).all(axis=-1)
     residual = result.fit.residual.reshape(n) if result.fit is not None else np.full(n, np.nan)
@@ -44,7 +47,7 @@ def joints_3d_table(result: ClipResult) -> pa.Table:
     return tables.from_columns("joints_3d", {
         "clip_id": clip.clip_id,
         "frame": np.repeat(np.arange(n_frames, dtype=np.int32), n_joints),
-        "joint": np.asarray(clip.skeleton.joints, dtype=object)[joint_index],
+        "joint": tables.labels(clip.skeleton.joints, joint_index),
         "joint_index": joint_index,
         "u": uv[:, 0],
         "v": uv[:, 1],
@@ -55,8 +58,8 @@ def joints_3d_table(result: ClipResult) -> pa.Table:
         "x": xyz[:, 0],
         "y": xyz[:, 1],
         "z": xyz[:, 2],
-        "lift_method": (np.where(lifted_rows, lifted.method, np.array(None)) if lifted is not None
-                        else np.full(n, None)),
+        "lift_method": (tables.labels([lifted.method], np.zeros(n), lifted_rows)
+                        if lifted is not None else pa.nulls(n, pa.string())),
         "scale": (np.repeat(lifted.scale, n_joints) if lifted is not None
                   else np.full(n, np.nan)),
         "sign_confidence": _flat(lifted.sign_confidence if lifted else None, n),

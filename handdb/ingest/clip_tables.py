@@ -6,7 +6,7 @@ import numpy as np
 import pyarrow as pa
 
 from handdb.clip import Clip
-from handdb.store.tables import from_columns
+from handdb.store.tables import from_columns, labels
 
 
 def tracks_2d_table(clip: Clip) -> pa.Table:
@@ -22,7 +22,7 @@ def tracks_2d_table(clip: Clip) -> pa.Table:
     return from_columns("tracks_2d", {
         "clip_id": clip.clip_id,
         "frame": frame,
-        "joint": np.asarray(clip.skeleton.joints)[joint],
+        "joint": labels(clip.skeleton.joints, joint),
         "joint_index": joint,
         "u": clip.uv[frame, joint, 0],
         "v": clip.uv[frame, joint, 1],
@@ -41,7 +41,7 @@ def truth_3d_table(clip: Clip) -> pa.Table | None:
     return from_columns("truth_3d", {
         "clip_id": clip.clip_id,
         "frame": frame,
-        "joint": np.asarray(clip.skeleton.joints)[joint],
+        "joint": labels(clip.skeleton.joints, joint),
         "joint_index": joint,
         **{axis: clip.truth[frame, joint, k] for k, axis in enumerate("xyz")},
     })

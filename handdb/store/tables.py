@@ -10,6 +10,7 @@ written always matches the contract.
 from __future__ import annotations
 
 import json
+from collections.abc import Sequence
 from dataclasses import dataclass
 from functools import cache
 from typing import Any
@@ -147,6 +148,30 @@ def is_sorted(table: pa.Table, keys: tuple[str, ...]) -> bool:
         ahead, tied = pc.less(head, tail), pc.equal(head, tail)
         in_order = pc.or_(ahead, tied if in_order is None else pc.and_(tied, in_order))
     return bool(pc.all(in_order).as_py())
+
+
+def labels(names: Sequence[str], codes: np.ndarray, valid: np.ndarray | None = None
+           ) -> pa.Array:
+    """The string column ``names[codes]``, null where ``valid`` is ``False``.
+
+    Parameters
+    ----------
+    names
+        The distinct strings (a skeleton's joints, the methods used).
+    codes
+        ``(n,) int``: index into ``names`` of each row.
+    valid
+        ``(n,) bool``: rows that have a value; all of them when ``None``.
+
+    Returns
+    -------
+    pyarrow.Array
+        ``(n,) string``. Arrow takes the rows from the few names in one call, where a numpy
+        string or object array would be converted string by string.
+    """
+    mask = None if valid is None else ~np.asarray(valid, dtype=bool)
+    indices = pa.array(np.asarray(codes, dtype=np.int32), mask=mask)
+    return pa.array(list(names), pa.string()).take(indices)
 
 
 def _column(value: Any, n: int) -> pa.Array:
