@@ -1,4 +1,5 @@
-"""CPU time of the per-clip images the build draws: preview contact sheet and depth chart.
+"""CPU time of the per-clip images: the build's thumbnail, the labelled preview sheet (now
+drawn on demand by ``handdb preview``) and the depth chart.
 
 Synthesises ``rapid`` clips of the project's synthetic hand, draws each image a few times
 after one warm-up (fonts, caches) and prints the best CPU time. With an output folder
@@ -17,6 +18,7 @@ from pathlib import Path
 import numpy as np
 
 from handdb.export.preview import write_preview_png
+from handdb.export.thumbnail import write_thumbnail_png
 from handdb.hand.skeletons import load_skeleton
 from handdb.synthetic import synthesize_clip
 from handdb.validation.depth import comparison_chart, validation_table
@@ -47,7 +49,12 @@ def main(out: Path) -> None:
         cpu = best_cpu_seconds(lambda: write_preview_png(  # noqa: B023
             preview, skeleton=skeleton, xyz=clip.xyz, units=clip.units,  # noqa: B023
             title=f"rapid, {n_frames} frames", fps=clip.fps))  # noqa: B023
-        print(f"write_preview_png  {n_frames:>6d} frames  cpu {cpu:6.3f} s")
+        print(f"write_preview_png   {n_frames:>6d} frames  cpu {cpu:6.3f} s")
+        thumbnail = out / f"thumbnail-{n_frames}.png"
+        thumbnail_cpu = best_cpu_seconds(lambda: write_thumbnail_png(  # noqa: B023
+            thumbnail, skeleton=skeleton, xyz=clip.xyz))  # noqa: B023
+        print(f"write_thumbnail_png {n_frames:>6d} frames  cpu {thumbnail_cpu:6.3f} s "
+              f"({thumbnail_cpu / cpu:.3f} of the sheet)")
 
         noise = rng.normal(size=(len(DEPTH_NOISE), *clip.xyz.shape)) * np.array(DEPTH_NOISE)[
             :, None, None, None]
@@ -57,7 +64,7 @@ def main(out: Path) -> None:
         chart = out / f"comparison-{n_frames}.png"
         cpu = best_cpu_seconds(lambda: chart.write_bytes(  # noqa: B023
             comparison_chart("bench", table, skeleton)))  # noqa: B023
-        print(f"comparison_chart   {n_frames:>6d} frames  cpu {cpu:6.3f} s")
+        print(f"comparison_chart    {n_frames:>6d} frames  cpu {cpu:6.3f} s")
 
 
 if __name__ == "__main__":

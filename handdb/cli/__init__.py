@@ -43,8 +43,7 @@ LAZY_COMMANDS: dict[str, tuple[str, str, str]] = {
     "export-bvh": ("handdb.cli.export", "export_bvh",
                    "Export a clip's joint rotations as BVH."),
     "preview": ("handdb.cli.preview", "preview",
-                "Draw a stored clip's labelled contact sheet as PNG (the build stores a "
-                "thumbnail)."),
+                "Draw a stored clip's contact sheet (camera and side views, labelled) as PNG."),
     "ratios": ("handdb.cli.ratios", "app",
                "Relative phalanx lengths from X-ray images and joint placement (Chaudhry et "
                "al.)."),

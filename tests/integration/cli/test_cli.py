@@ -52,7 +52,8 @@ def test_sql_error_is_reported_not_raised(db):
 
 
 @pytest.mark.parametrize("command", [[], ["build"], ["sql"], ["serve"], ["demo"],
-                                     ["ratios", "place"], ["export-usd"], ["export-bvh"]])
+                                     ["ratios", "place"], ["export-usd"], ["export-bvh"],
+                                     ["preview"]])
 def test_every_command_explains_itself(command):
     result = runner.invoke(app, [*command, "--help"])
     assert result.exit_code == 0
