@@ -10,9 +10,13 @@ For synthetic inboxes of several sizes this prints, and saves as JSON in ``bench
 - peak memory (``ru_maxrss``) of every build;
 - how build time grows with clips and with frames (exponent of a log-log fit);
 - Prefect's cost per task, from a flow of empty tasks shaped like the build;
-- DuckDB query latencies on a database of ten million ``joints_3d`` rows.
+- DuckDB query latencies on a database of ten million ``joints_3d`` rows;
+- issue 16's targets, each with this run's figure and whether it is met: empty build,
+  rebuild with nothing to do, ``handdb --help`` and ``handdb sql``, marginal build over
+  the I/O floor, fixed cost per clip, peak memory.
 
-Run: ``.venv/bin/python benchmarks/run.py [--plan quick|default|large]`` (``make bench``).
+Run: ``.venv/bin/python benchmarks/run.py [--plan quick|default|large] [--runner R]``
+(``make bench``; ``--quick`` is a smoke test of every figure, not a measurement).
 Figures by wall time are noisy on a shared machine; CPU seconds are printed beside them.
 """
 
@@ -65,6 +69,10 @@ QUERIES = {
     "one clip's frames": "SELECT * FROM joints_3d WHERE clip_id = 'q-0042' ORDER BY frame",
 }
 PREFECT_OVERHEAD_CLIPS = 100
+#: Where clips run in the measured builds, as ``handdb build --runner``.
+DEFAULT_RUNNER = "thread"
+#: The runner without Prefect (its builds skip the measure of Prefect's own cost).
+LOCAL_RUNNER = "local"
 
 
 @dataclass(frozen=True)
@@ -75,13 +83,21 @@ class Plan:
     by_frames: tuple[tuple[int, int], ...]
     stage_clips: tuple[int, int]
     query_rows: int
+    #: The inbox rebuilt with nothing to do (issue 16: 40 clips of 5000 frames).
+    noop: tuple[int, int] = (40, 5000)
+    #: Clips of the flow of empty tasks that measures Prefect alone.
+    prefect_clips: int = PREFECT_OVERHEAD_CLIPS
+    #: Runs of each start-up command (the median is reported).
+    startup_repeats: int = 5
 
 
 DEFAULT = Plan(by_clips=((10, 300), (30, 300), (100, 300)),
                by_frames=((4, 1000), (4, 5000), (4, 20_000)),
                stage_clips=(8, 5000), query_rows=QUERY_ROWS)
-QUICK = Plan(by_clips=((4, 300), (16, 300)), by_frames=((2, 1000), (2, 4000)),
-             stage_clips=(4, 1000), query_rows=1_000_000)
+#: Every figure at small sizes (a few minutes): a smoke test, not a measurement.
+QUICK = Plan(by_clips=((2, 100), (6, 100)), by_frames=((2, 200), (2, 800)),
+             stage_clips=(2, 200), query_rows=100_000, noop=(4, 200), prefect_clips=10,
+             startup_repeats=1)
 LARGE = Plan(by_clips=((10, 300), (100, 300), (1000, 300)),
              by_frames=((10, 1000), (10, 5000), (10, 20_000)),
              stage_clips=(8, 20_000), query_rows=QUERY_ROWS)
@@ -235,32 +251,37 @@ def io_floor(inbox: Path, out: Path) -> Timing:
 # -- whole builds in a fresh process -----------------------------------------------------
 
 
-def child_build(inbox: str, db: str) -> None:
-    """Run the build flow (quick flows) and print its figures as JSON (the child side)."""
+def child_build(inbox: str, db: str, runner: str) -> None:
+    """Run the build on ``runner`` and print its figures as JSON (the child side).
+
+    CPU time counts the build's own worker processes (Dask's, a process pool's) as well.
+    """
     start = time.perf_counter()
     from handdb.build import run_build
 
     imported = time.perf_counter()
-    summary = run_build(inbox, db)
+    summary = run_build(inbox, db, runner=runner)
     finished = time.perf_counter()
     usage = resource.getrusage(resource.RUSAGE_SELF)
+    workers = resource.getrusage(resource.RUSAGE_CHILDREN)
     print(json.dumps({
         "import_seconds": imported - start,
         "flow_seconds": finished - imported,
         "process_seconds": finished - start,
-        "cpu_seconds": usage.ru_utime + usage.ru_stime,
-        "maxrss_mb": usage.ru_maxrss / 1024,
+        "cpu_seconds": usage.ru_utime + usage.ru_stime + workers.ru_utime + workers.ru_stime,
+        "maxrss_mb": max(usage.ru_maxrss, workers.ru_maxrss) / 1024,
         "processed": len(summary.processed),
         "failed": len(summary.failed),
         "refused": len(summary.refusals),
     }))
 
 
-def build(inbox: Path, db: Path) -> dict:
+def build(inbox: Path, db: Path, runner: str = DEFAULT_RUNNER) -> dict:
     """Build ``db`` from ``inbox`` in a fresh Python process; its figures and wall time."""
     env = os.environ | {"PREFECT_HOME": str(PREFECT_HOME)}
     start = time.perf_counter()
-    done = subprocess.run([sys.executable, __file__, "--child-build", str(inbox), str(db)],
+    done = subprocess.run([sys.executable, __file__, "--child-build", str(inbox), str(db),
+                           runner],
                           capture_output=True, text=True, env=env, cwd=REPO, check=False)
     wall = time.perf_counter() - start
     if done.returncode:
@@ -399,14 +420,14 @@ def print_stage_table(timings: dict[str, Timing]) -> None:
 
 
 def run_builds(sizes: tuple[tuple[int, int], ...], scratch: Path,
-               startup: dict[str, float]) -> list[dict]:
+               startup: dict[str, float], runner: str) -> list[dict]:
     """Build an inbox of every size; time it against the I/O floor."""
     rows = []
     for n_clips, n_frames in sizes:
         inbox, db = scratch / f"inbox-{n_clips}x{n_frames}", scratch / f"db-{n_clips}x{n_frames}"
         frames = write_inbox(inbox, n_clips, n_frames)
         floor = io_floor(inbox, scratch / f"floor-{n_clips}x{n_frames}")
-        figures = build(inbox, db)
+        figures = build(inbox, db, runner)
         beyond = figures["process_seconds"] - startup["process_seconds"]
         beyond_cpu = figures["cpu_seconds"] - startup["cpu_seconds"]
         rows.append(figures | {"n_clips": n_clips, "n_frames": n_frames, "frames": frames,
@@ -424,8 +445,97 @@ def run_builds(sizes: tuple[tuple[int, int], ...], scratch: Path,
     return rows
 
 
-def main(plan: Plan, out: Path) -> dict:
-    results: dict = {"machine": machine(), "plan": asdict(plan)}
+# -- issue 16's targets ------------------------------------------------------------------
+
+
+def startup_commands(scratch: Path, repeats: int) -> dict[str, float]:
+    """Median wall seconds of ``handdb --help`` and ``handdb sql "SELECT 1"``, fresh processes."""
+    sys.path.insert(0, str(REPO))
+    from benchmarks.bench_startup import small_database, wall_time
+
+    cli = [sys.executable, "-c", "from handdb.cli import main; main()"]
+    db = small_database(scratch / "startup")
+    return {"help": wall_time([*cli, "--help"], repeats),
+            "sql": wall_time([*cli, "sql", "SELECT 1", "--db", str(db)], repeats)}
+
+
+def noop_rebuild(scratch: Path, n_clips: int, n_frames: int, runner: str) -> dict:
+    """Build an inbox, then build it again with nothing changed; the second build's figures."""
+    inbox, db = scratch / f"noop-inbox-{n_clips}x{n_frames}", scratch / "noop-db"
+    write_inbox(inbox, n_clips, n_frames)
+    build(inbox, db, runner)
+    return build(inbox, db, runner) | {"n_clips": n_clips, "n_frames": n_frames}
+
+
+def slope(rows: list[dict], size: str, value: str) -> float:
+    """Change of ``value`` per unit of ``size`` between the first and last of ``rows``."""
+    first, last = rows[0], rows[-1]
+    return (last[value] - first[value]) / (last[size] - first[size])
+
+
+@dataclass(frozen=True)
+class Target:
+    """One line of the targets table: a figure, how it reads, issue 16's bound."""
+
+    figure: str
+    value: float
+    shown: str
+    target: str
+    met: bool
+    load: float
+
+
+def targets(results: dict) -> list[Target]:
+    """Issue 16's targets, each with this run's figure (ratios within this one run).
+
+    The marginal build and the fixed cost per clip are differences between builds, so the
+    start-up cancels: the marginal ratio is the longest clips' build beyond an empty one,
+    over the I/O floor of the same files; the fixed cost per clip is the build's CPU per
+    added clip (``by_clips``) less the per-frame CPU (``by_frames``) times those clips'
+    frames. Peak RSS is bounded if it does not grow with the number of clips.
+    """
+    startup, noop, commands = results["startup"], results["noop"], results["commands"]
+    by_clips, by_frames = results["by_clips"], results["by_frames"]
+    longest, many, few = by_frames[-1], by_clips[-1], by_clips[0]
+    per_frame_cpu = slope(by_frames, "frames", "cpu_seconds")
+    fixed_cpu = slope(by_clips, "n_clips", "cpu_seconds") - per_frame_cpu * many["n_frames"]
+    rss_growth = many["maxrss_mb"] / few["maxrss_mb"]
+    shape = f"{longest['n_clips']} x {longest['n_frames']}"
+    return [
+        Target("empty build, wall", startup["wall_seconds"], f"{startup['wall_seconds']:.2f} s",
+               "<= 5 s", startup["wall_seconds"] <= 5, startup["load"]),
+        Target(f"rebuild with nothing to do, {noop['n_clips']} x {noop['n_frames']}, wall",
+               noop["wall_seconds"], f"{noop['wall_seconds']:.2f} s", "<= 2 s",
+               noop["wall_seconds"] <= 2, noop["load"]),
+        Target("handdb --help, wall", commands["help"], f"{commands['help']:.2f} s", "< 1 s",
+               commands["help"] < 1, commands["load"]),
+        Target('handdb sql "SELECT 1", wall', commands["sql"], f"{commands['sql']:.2f} s",
+               "< 1 s", commands["sql"] < 1, commands["load"]),
+        Target(f"marginal build / I/O floor, {shape}, CPU", longest["floor_ratio_cpu"],
+               f"{longest['floor_ratio_cpu']:.1f}x", "<= 3x", longest["floor_ratio_cpu"] <= 3,
+               longest["load"]),
+        Target(f"marginal build / I/O floor, {shape}, wall", longest["floor_ratio"],
+               f"{longest['floor_ratio']:.1f}x", "<= 3x", longest["floor_ratio"] <= 3,
+               longest["load"]),
+        Target(f"fixed cost per clip, {few['n_clips']}..{many['n_clips']} x "
+               f"{many['n_frames']}, CPU", 1000 * fixed_cpu, f"{1000 * fixed_cpu:.0f} ms",
+               "<= 50 ms", fixed_cpu <= 0.05, many["load"]),
+        Target(f"peak RSS, {many['n_clips']} against {few['n_clips']} clips", rss_growth,
+               f"{many['maxrss_mb']:.0f} MB ({rss_growth:.2f}x)",
+               "bounded by the clips in flight (<= 1.25x)", rss_growth <= 1.25, many["load"]),
+    ]
+
+
+def print_targets(rows: list[Target]) -> None:
+    """The targets as a markdown table."""
+    print("| figure | this run | target | met? | load |\n|---|---:|---|---|---:|")
+    for row in rows:
+        print(f"| {row.figure} | {row.shown} | {row.target} | {'yes' if row.met else 'no'} "
+              f"| {row.load:.1f} |")
+
+
+def main(plan: Plan, out: Path, runner: str = DEFAULT_RUNNER) -> dict:
+    results: dict = {"machine": machine(), "plan": asdict(plan), "runner": runner}
     print(f"{results['machine']['cpu_model']}, {results['machine']['cpus']} CPUs, "
           f"load {results['machine']['load_at_start']:.1f}")
     PREFECT_HOME.mkdir(parents=True, exist_ok=True)
@@ -433,11 +543,11 @@ def main(plan: Plan, out: Path) -> dict:
         scratch = Path(folder)
         empty = scratch / "empty-inbox"
         empty.mkdir()
-        build(empty, scratch / "warm-up-db")
-        startups = [build(empty, scratch / f"empty-db-{i}") for i in range(3)]
+        build(empty, scratch / "warm-up-db", runner)
+        startups = [build(empty, scratch / f"empty-db-{i}", runner) for i in range(3)]
         startup = {name: min(s[name] for s in startups) for name in
                    ("process_seconds", "cpu_seconds", "import_seconds", "flow_seconds",
-                    "maxrss_mb")}
+                    "maxrss_mb", "wall_seconds")} | {"load": load_average()}
         results["startup"] = startup
         print(f"start-up (empty build in a fresh process): {startup['process_seconds']:.1f} s, "
               f"{startup['cpu_seconds']:.1f} s CPU "
@@ -458,8 +568,8 @@ def main(plan: Plan, out: Path) -> dict:
         print(f"\nwhole builds in a fresh process; 'beyond' is the build's time less start-up\n"
               f"{'clips':>6}{'frames':>8}{'total':>10}{'build s':>9}{'cpu s':>8}{'beyond':>9}"
               f"{'floor':>8}{'ratio':>8}{'cpu ratio':>10}{'frames/s':>10}{'RSS MB':>9}{'load':>6}")
-        results["by_clips"] = run_builds(plan.by_clips, scratch, startup)
-        results["by_frames"] = run_builds(plan.by_frames, scratch, startup)
+        results["by_clips"] = run_builds(plan.by_clips, scratch, startup, runner)
+        results["by_frames"] = run_builds(plan.by_frames, scratch, startup, runner)
         results["growth"] = {
             "clips_exponent": fitted_exponent([r["n_clips"] for r in results["by_clips"]],
                                               [r["beyond_startup"] for r in results["by_clips"]]),
@@ -470,10 +580,11 @@ def main(plan: Plan, out: Path) -> dict:
         print(f"growth: time ~ clips^{results['growth']['clips_exponent']:.2f}, "
               f"time ~ frames^{results['growth']['frames_exponent']:.2f}")
 
-        overhead = prefect_overhead(PREFECT_OVERHEAD_CLIPS)
-        results["prefect_overhead"] = overhead
-        print(f"Prefect alone: {overhead['per_task_ms']:.1f} ms per task, "
-              f"{overhead['per_clip_ms']:.0f} ms per clip of {len(STAGES)} tasks")
+        if runner != LOCAL_RUNNER:
+            overhead = prefect_overhead(plan.prefect_clips)
+            results["prefect_overhead"] = overhead
+            print(f"Prefect alone: {overhead['per_task_ms']:.1f} ms per task, "
+                  f"{overhead['per_clip_ms']:.0f} ms per clip of {len(STAGES)} tasks")
 
         query_db = scratch / "query-db"
         n_rows = write_query_database(query_db, plan.query_rows)
@@ -482,6 +593,14 @@ def main(plan: Plan, out: Path) -> dict:
         print(f"\nDuckDB on {n_rows:,} joints_3d rows (best of {QUERY_REPEATS}):")
         for name, seconds in latencies.items():
             print(f"  {name:<26}{1000 * seconds:>9.0f} ms")
+
+        results["noop"] = noop_rebuild(scratch, *plan.noop, runner)
+        results["commands"] = startup_commands(scratch, plan.startup_repeats) | {
+            "load": load_average()}
+        rows = targets(results)
+        results["targets"] = [asdict(row) for row in rows]
+        print(f"\nissue 16's targets (builds on the '{runner}' runner):")
+        print_targets(rows)
     results["load_at_end"] = load_average()
     out.parent.mkdir(parents=True, exist_ok=True)
     out.write_text(json.dumps(results, indent=1))
@@ -497,7 +616,10 @@ def parse_args() -> argparse.Namespace:
     parser.add_argument("--quick", action="store_const", const="quick", dest="plan",
                         help="same as --plan quick")
     parser.add_argument("--out", type=Path, help="JSON file of the figures")
-    parser.add_argument("--child-build", nargs=2, metavar=("INBOX", "DB"), help=argparse.SUPPRESS)
+    parser.add_argument("--runner", default=DEFAULT_RUNNER,
+                        help="where the measured builds run clips (handdb build --runner)")
+    parser.add_argument("--child-build", nargs=3, metavar=("INBOX", "DB", "RUNNER"),
+                        help=argparse.SUPPRESS)
     parser.add_argument("--child-overhead", type=int, metavar="CLIPS", help=argparse.SUPPRESS)
     return parser.parse_args()
 
@@ -509,4 +631,4 @@ if __name__ == "__main__":
     elif args.child_overhead:
         child_prefect_overhead(args.child_overhead)
     else:
-        main(PLANS[args.plan], args.out or OUT_DIR / f"bench-{args.plan}.json")
+        main(PLANS[args.plan], args.out or OUT_DIR / f"bench-{args.plan}.json", args.runner)
