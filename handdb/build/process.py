@@ -110,6 +110,18 @@ def _stage_runners(context: BuildContext, markers: bool
     return runners
 
 
+def first_stage(item: PlannedClip) -> str:
+    """The stage :func:`process_clip` starts ``item`` at.
+
+    The plan's first changed stage (the first of all for a current clip), moved back to
+    the model fit for a marker clip, whose bone lengths, gap filling and lifting are one fit.
+    """
+    start = item.start or STAGES[0]
+    if item.markers and STAGES.index(start) > STAGES.index(MARKER_FIT_STAGES[0]):
+        start = MARKER_FIT_STAGES[0]
+    return start
+
+
 def process_clip(item: PlannedClip, context: BuildContext) -> ClipResult | Refusal:
     """Run the stages ``item`` needs, from its first changed one, and commit the clip.
 
@@ -130,9 +142,7 @@ def process_clip(item: PlannedClip, context: BuildContext) -> ClipResult | Refus
         the clip, naming the stage.
     """
     clip_id = item.entry.clip_id
-    start = item.start or STAGES[0]
-    if item.markers and STAGES.index(start) > STAGES.index(MARKER_FIT_STAGES[0]):
-        start = MARKER_FIT_STAGES[0]
+    start = first_stage(item)
     stage = start
     try:
         progress.started(clip_id, _progress_stage(item, stage))
