@@ -47,7 +47,13 @@ FLOW_NAME = "handdb-build"
 
 @dataclass
 class BuildSummary:
-    """What a build did, for the command line, the artifacts and the ``runs`` table."""
+    """What a build did, for the command line, the artifacts and the ``runs`` table.
+
+    ``flow_run_id`` and ``flow_run_url`` are the orchestrator's run of the build and its
+    page, when an orchestrator ran it (``None`` for the local runner, and the URL ``None``
+    too when no lasting server shows the run); ``changed`` says whether the build wrote
+    anything besides its ``runs`` row.
+    """
 
     run_id: str
     inbox: str
@@ -63,6 +69,9 @@ class BuildSummary:
     timings: dict[str, float] = field(default_factory=dict)
     removed_temporaries: int = 0
     repairs: tuple[str, ...] = ()
+    flow_run_id: str | None = None
+    flow_run_url: str | None = None
+    changed: bool = False
 
     @property
     def ok(self) -> bool:
@@ -82,12 +91,14 @@ class Build:
 
     @classmethod
     def begin(cls, inbox: str, db: str, options: BuildOptions, *, run_id: str | None = None,
-              plan: BuildPlan | None = None) -> Build:
+              plan: BuildPlan | None = None, flow_run_id: str | None = None,
+              flow_run_url: str | None = None) -> Build:
         """Start a build: clean up after an interrupted one, plan, store the X-ray tables.
 
         The caller holds ``Store(db).lock()`` until :meth:`finish` returns. ``plan`` is a
         plan made a moment before for the same inbox, database and options (it is made
-        here when not given).
+        here when not given). ``flow_run_id`` and ``flow_run_url`` name the orchestrator's
+        run of this build and its page, for the ``runs`` row.
         """
         started = datetime.now(UTC)
         run_id = run_id or uuid.uuid4().hex[:12]
@@ -101,7 +112,8 @@ class Build:
             store.write("joint_ratios", "joint_ratios", plan.xray.ratios)
         summary = BuildSummary(run_id=run_id, inbox=inbox, db=db, n_clips=len(plan.clips),
                                unchanged=[c.clip_id for c in plan.unchanged],
-                               removed_temporaries=removed, repairs=plan.repairs)
+                               removed_temporaries=removed, repairs=plan.repairs,
+                               flow_run_id=flow_run_id, flow_run_url=flow_run_url)
         summary.refusals.extend([*plan.refusals, *plan.xray.refusals])
         summary.timings["scan"] = time.perf_counter() - clock
         progress.expect(len(plan.clips))
@@ -146,6 +158,10 @@ class Build:
         quarantine = self.plan.quarantine(store, self._clip_refusals)
         if quarantine is not None:
             store.write("quarantine", "quarantine", quarantine)
+        xray = self.plan.xray
+        self.summary.changed = bool(
+            self.summary.processed or self.summary.removed_temporaries or quarantine is not None
+            or xray.measurements or xray.ratios_changed)
         self._record_run(store)
         return self.summary
 
@@ -166,6 +182,8 @@ class Build:
             "n_quarantined": [len(summary.refusals)],
             "n_failed": [len(summary.failed)],
             "timings": [json.dumps(summary.timings, sort_keys=True)],
+            "flow_run_id": [summary.flow_run_id],
+            "flow_run_url": [summary.flow_run_url],
         })
         store.write("runs", f"{self.started:%Y%m%dT%H%M%S}-{summary.run_id}", row)
 
