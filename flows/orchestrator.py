@@ -55,16 +55,25 @@ class PrefectOrchestrator:
 
         The Prefect API is this process's (:func:`~handdb_flows.settings.shared_api`):
         Dask's worker processes report to it, and a temporary server started for it ends
-        with this process, even when the build is killed.
+        with this process, even when the build is killed. A build that failed on a clip
+        ends in a ``Failed`` state and still returns its summary; one that could not run
+        at all raises what stopped it.
         """
         from handdb_flows.build import WINDOW_PER_WORKER, build
         from handdb_flows.settings import quick_flows, shared_api
 
         flow_ = build.with_options(task_runner=task_runner(runner, workers, address))
         with nullcontext() if locked else Store(db).lock(), quick_flows(), shared_api():
-            return flow_(inbox=inbox, db=db, gap_fill=options.gap_fill, lift=options.lift,
-                         export_usd=options.export_usd, compare=list(options.compare),
-                         window=workers * WINDOW_PER_WORKER, locked=True)
+            state = flow_(inbox=inbox, db=db, gap_fill=options.gap_fill, lift=options.lift,
+                          export_usd=options.export_usd, compare=list(options.compare),
+                          window=workers * WINDOW_PER_WORKER, locked=True, return_state=True)
+            outcome = state.result(raise_on_failure=False)
+        if isinstance(outcome, BaseException):
+            raise outcome
+        if not isinstance(outcome, BuildSummary):
+            raise RuntimeError(f"the build flow ended in state {state.name!r} "
+                               f"({state.message}) without a build summary")
+        return outcome
 
     def serve(self, inbox: str, db: str, *, cron: str | None, interval: float | None
               ) -> None:

@@ -19,6 +19,7 @@ import urllib.error
 import urllib.request
 from collections.abc import Iterator
 from pathlib import Path
+from typing import Any
 
 from fsspec.core import url_to_fs
 from fsspec.implementations.local import LocalFileSystem
@@ -103,9 +104,23 @@ def prefect_api() -> Iterator[str]:
             process.wait()
 
 
-def _absolute(location: str) -> str:
+def absolute_location(location: str) -> str:
+    """``location`` with a local path made absolute; a URL as it is."""
     fs, _ = url_to_fs(location)
     return str(Path(location).resolve()) if isinstance(fs, LocalFileSystem) else location
+
+
+def deployment_settings(inbox: str, db: str) -> dict[str, Any]:
+    """The served deployment's name, description and parameters, as ``Flow.serve`` takes them.
+
+    The description is the flow's markdown one (:data:`handdb_flows.build.DESCRIPTION`),
+    not its docstring, whose reStructuredText the Prefect UI would show raw; local paths
+    are made absolute, since scheduled runs start in another working folder.
+    """
+    from handdb_flows.build import DESCRIPTION
+
+    return {"name": DEPLOYMENT_NAME, "description": DESCRIPTION,
+            "parameters": {"inbox": absolute_location(inbox), "db": absolute_location(db)}}
 
 
 def serve_build(inbox: str, db: str, *, cron: str | None = None,
@@ -117,9 +132,8 @@ def serve_build(inbox: str, db: str, *, cron: str | None = None,
     from handdb_flows.build import build
     from prefect.settings import PREFECT_API_URL, temporary_settings
 
-    parameters = {"inbox": _absolute(inbox), "db": _absolute(db)}
+    settings = deployment_settings(inbox, db)
     with stop_on_sigterm(), prefect_api() as api_url, \
             temporary_settings({PREFECT_API_URL: api_url}):
-        build.serve(name=DEPLOYMENT_NAME, cron=cron, interval=interval, parameters=parameters,
-                    pause_on_shutdown=False, print_starting_message=True,
-                    limit=CONCURRENT_BUILDS)
+        build.serve(**settings, cron=cron, interval=interval, pause_on_shutdown=False,
+                    print_starting_message=True, limit=CONCURRENT_BUILDS)

@@ -11,8 +11,12 @@ from handdb_flows.reaper import stop_with_this_process
 from prefect.settings import (
     PREFECT_API_URL,
     PREFECT_FLOWS_HEARTBEAT_FREQUENCY,
+    get_current_settings,
     temporary_settings,
 )
+
+#: API URLs of the temporary servers :func:`shared_api` started; they end with this process.
+_TEMPORARY_APIS: set[str] = set()
 
 
 @contextlib.contextmanager
@@ -46,6 +50,7 @@ def shared_api() -> Iterator[str]:
     server = SubprocessASGIServer()
     server.start()
     _reaped(server.server_process.pid)
+    _TEMPORARY_APIS.add(server.api_url)
     with temporary_settings({PREFECT_API_URL: server.api_url}):
         yield server.api_url
 
@@ -54,3 +59,21 @@ def shared_api() -> Iterator[str]:
 def _reaped(pid: int) -> subprocess.Popen:
     """The reaper of process ``pid``, started once however often the server is reused."""
     return stop_with_this_process(pid)
+
+
+def lasting_run_url() -> str | None:
+    """The page of the current flow run in the Prefect UI, if it outlives this process.
+
+    That is when ``PREFECT_UI_URL`` is set, or when the API is a server of its own
+    (``PREFECT_API_URL``, as ``handdb serve`` sets it); a temporary server started for one
+    build (:func:`shared_api`), or Prefect's in-process one, stops with the build, and a
+    link to it would lead nowhere. ``None`` outside a flow run.
+    """
+    from prefect.runtime import flow_run
+
+    api_url = PREFECT_API_URL.value()
+    # Prefect fills in a UI URL from the API URL, but leaves it out of the fields set.
+    ui_url_set = "ui_url" in get_current_settings().model_fields_set
+    if ui_url_set or (api_url and api_url not in _TEMPORARY_APIS):
+        return flow_run.ui_url
+    return None

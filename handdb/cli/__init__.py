@@ -187,6 +187,8 @@ def print_summary(summary) -> None:
         f"{len(summary.failed)} failed{_timing(summary.timings)}",
         soft_wrap=True,
     )
+    if summary.flow_run_url:
+        console.print(f"  Prefect run: {summary.flow_run_url}", soft_wrap=True)
     for repair in summary.repairs:
         console.print(f"  [yellow]repaired[/] {escape(repair)}", soft_wrap=True)
     for refusal in summary.refusals:

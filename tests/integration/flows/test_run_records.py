@@ -2,7 +2,7 @@
 
 import json
 
-from handdb_flows.build import artifact_key
+from handdb_flows.build import artifact_key, summary_key
 from handdb_flows.settings import quick_flows
 from prefect.client.orchestration import get_client
 from prefect.client.schemas.filters import ArtifactFilter, ArtifactFilterKey
@@ -41,7 +41,7 @@ def test_every_build_leaves_a_runs_row_and_a_summary_artifact(inbox, tmp_path, w
         assert parameters["inbox"] == str(inbox) and parameters["db"] == str(db)
         assert set(json.loads(row["timings"])) == {"scan", "clips"}
 
-    summaries = {text.splitlines()[0]: text for text in markdown_artifacts("handdb-build")}
+    summaries = {text.splitlines()[0]: text for text in markdown_artifacts(summary_key(str(db)))}
     report = summaries[f"# handdb build {first.run_id}"]
     assert "processed 3" in report and f"frames processed: {3 * n_frames}" in report
     assert "lost.tracks.csv" in report
