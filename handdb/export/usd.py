@@ -32,6 +32,7 @@ from __future__ import annotations
 
 import os
 import tempfile
+import threading
 from pathlib import Path
 
 import numpy as np
@@ -52,6 +53,14 @@ from handdb.export.rotations import (
 )
 from handdb.hand.skeletons import Skeleton
 
+#: USD loads its plugins when a process makes its first stage, and two threads doing that
+#: at once can deadlock with the GIL held: 3 of 15 fresh processes hung whose two threads
+#: each made a stage at the same moment, none of 15 once one stage had been made before
+#: (usd-core 26.11). A build exports clips from several threads, so a process's first stage
+#: is made under this lock.
+_FIRST_STAGE = threading.Lock()
+_first_stage_made = False
+
 #: File suffixes written as a plain layer (``.usd`` is written as binary crate).
 LAYER_SUFFIXES = (".usd", ".usdc", ".usda")
 USDZ_SUFFIX = ".usdz"
@@ -63,6 +72,17 @@ def joint_paths(skeleton: Skeleton) -> list[str]:
     for joint, parent in zip(skeleton.joints, skeleton.parents, strict=True):
         paths.append(joint if parent < 0 else f"{paths[parent]}/{joint}")
     return paths
+
+
+def _new_stage() -> Usd.Stage:
+    """An empty in-memory stage; the process's first one is made alone (:data:`_FIRST_STAGE`)."""
+    global _first_stage_made
+    if not _first_stage_made:
+        with _FIRST_STAGE:
+            stage = Usd.Stage.CreateInMemory()
+            _first_stage_made = True
+            return stage
+    return Usd.Stage.CreateInMemory()
 
 
 def _usd_matrices(orientations: np.ndarray, positions: np.ndarray) -> Vt.Matrix4dArray:
@@ -175,7 +195,7 @@ def build_clip_stage(
     -------
     pxr.Usd.Stage
     """
-    stage = Usd.Stage.CreateInMemory()
+    stage = _new_stage()
     _set_stage_metadata(stage, motion.n_frames, fps, units)
     root = UsdSkel.Root.Define(stage, Sdf.Path(f"/{hand.capitalize()}Hand"))
     stage.SetDefaultPrim(root.GetPrim())
