@@ -41,19 +41,27 @@ KeepLengths = Annotated[bool, typer.Option(
     "directions) instead of reproducing joints_3d exactly.")]
 
 
+AtOrigin = Annotated[bool | None, typer.Option(
+    "--at-origin/--camera-frame", show_default=False,
+    help="Put the wrist of the first frame at the origin and the hand on the floor (Y up), "
+    "or keep the camera's coordinates. Default: at the origin for USD, BVH, glTF and FBX, "
+    "camera coordinates for TRC and C3D.")]
+
+
 def _fail(exc: HanddbError) -> typer.Exit:
     typer.echo(f"error: {exc}", err=True)
     return typer.Exit(1)
 
 
 def _export(db: str, clip: str, out: Path, format_names: tuple[str, ...],
-            keep_lengths: bool = False) -> None:
+            keep_lengths: bool = False, at_origin: bool | None = None) -> None:
     suffixes = tuple(suffix for name in format_names for suffix in FORMATS[name].suffixes)
     if out.suffix not in suffixes:
         raise typer.BadParameter(f"'{out}' must end in one of {', '.join(suffixes)}",
                                  param_hint="--out")
     try:
-        written = export_stored_clip(db, clip, out, keep_lengths=keep_lengths)
+        written = export_stored_clip(db, clip, out, keep_lengths=keep_lengths,
+                                     at_origin=at_origin)
     except HanddbError as exc:
         raise _fail(exc) from None
     typer.echo(str(written))
@@ -61,20 +69,22 @@ def _export(db: str, clip: str, out: Path, format_names: tuple[str, ...],
 
 @app.command("export-usd")
 def export_usd(clip: Clip, out: UsdOut, db: Db = DEFAULT_DB,
-               keep_lengths: KeepLengths = False) -> None:
+               keep_lengths: KeepLengths = False, at_origin: AtOrigin = None) -> None:
     """Export a clip as a UsdSkel animation with a skinned hand mesh."""
-    _export(db, clip, out, ("usd", "usdz"), keep_lengths)
+    _export(db, clip, out, ("usd", "usdz"), keep_lengths, at_origin)
 
 
 @app.command("export-bvh")
-def export_bvh(clip: Clip, out: BvhOut, db: Db = DEFAULT_DB) -> None:
+def export_bvh(clip: Clip, out: BvhOut, db: Db = DEFAULT_DB,
+               at_origin: AtOrigin = None) -> None:
     """Export a clip's joint rotations as BVH."""
-    _export(db, clip, out, ("bvh",))
+    _export(db, clip, out, ("bvh",), at_origin=at_origin)
 
 
 @app.command("export")
 def export_clips(format_name: Format, out: OutDir, clip_ids: ClipIds = None,
-                 db: Db = DEFAULT_DB, keep_lengths: KeepLengths = False) -> None:
+                 db: Db = DEFAULT_DB, keep_lengths: KeepLengths = False,
+                 at_origin: AtOrigin = None) -> None:
     """Export clips, one file per clip, as USD, BVH, glTF, FBX, TRC or C3D.
 
     Every clip of the database when none is named. Prints each file written; a clip the
@@ -86,7 +96,8 @@ def export_clips(format_name: Format, out: OutDir, clip_ids: ClipIds = None,
     skipped = 0
     try:
         for result in export_stored_clips(db, format_name, out, clip_ids or None,
-                                          ExportOptions(keep_lengths=keep_lengths)):
+                                          ExportOptions(keep_lengths=keep_lengths,
+                                                        at_origin=at_origin)):
             if result.path is None:
                 skipped += 1
                 typer.echo(f"skipped {result.clip_id}: {result.skipped}", err=True)

@@ -31,9 +31,20 @@ class ExportOptions:
     keep_lengths
         Posed formats: give every bone its stored length (rigid bones, measured
         directions) instead of reproducing ``joints_3d`` exactly.
+    at_origin
+        Move the clip so its first placed root (wrist) is at the origin horizontally and its
+        lowest point on the floor, Y up (:func:`handdb.export.placement.at_origin`);
+        ``False`` keeps the camera's coordinates; ``None`` (the default): the format's
+        own default, :attr:`ExportFormat.posed` (the animation formats move the hand, TRC
+        and C3D keep camera coordinates).
     """
 
     keep_lengths: bool = False
+    at_origin: bool | None = None
+
+    def places_at_origin(self, entry: ExportFormat) -> bool:
+        """Whether a file of format ``entry`` is written with the hand at the origin."""
+        return entry.posed if self.at_origin is None else self.at_origin
 
 
 @dataclass(frozen=True)

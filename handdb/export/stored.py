@@ -11,12 +11,13 @@ file of that format is written.
 from __future__ import annotations
 
 from collections.abc import Iterator
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
 
 from handdb.errors import ParameterError, StoreError
+from handdb.export import placement
 from handdb.export.formats import FORMATS, ExportFormat, ExportOptions, format_for_suffix
 from handdb.hand.skeletons import Skeleton, bone_length_array, load_skeleton
 from handdb.store.database import Store
@@ -141,11 +142,14 @@ def write_c3d(motion: StoredMotion, path: Path, options: ExportOptions) -> Path:
 def _write(entry: ExportFormat, motion: StoredMotion, out: Path,
            options: ExportOptions) -> Path:
     out.parent.mkdir(parents=True, exist_ok=True)
+    if options.places_at_origin(entry):
+        motion = replace(motion, xyz=placement.at_origin(motion.xyz, motion.skeleton))
     return entry.load()(motion, out, options)
 
 
 def export_stored_clip(
-    db: str, clip_id: str, out: str | Path, *, keep_lengths: bool = False
+    db: str, clip_id: str, out: str | Path, *, keep_lengths: bool = False,
+    at_origin: bool | None = None,
 ) -> Path:
     """Export the stored clip ``clip_id`` to ``out``, in the format its suffix names.
 
@@ -161,6 +165,9 @@ def export_stored_clip(
     keep_lengths
         Posed formats: give every bone its stored length instead of reproducing
         ``joints_3d`` exactly (BVH bones always keep their lengths).
+    at_origin
+        Move the hand to the origin, on the floor; ``None``: the format's default (see
+        :class:`~handdb.export.formats.ExportOptions`).
 
     Returns
     -------
@@ -177,7 +184,7 @@ def export_stored_clip(
     out = Path(out)
     entry = format_for_suffix(out)
     return _write(entry, read_stored_motion(db, clip_id), out,
-                  ExportOptions(keep_lengths=keep_lengths))
+                  ExportOptions(keep_lengths=keep_lengths, at_origin=at_origin))
 
 
 @dataclass(frozen=True)

@@ -6,6 +6,7 @@ import pytest
 from typer.testing import CliRunner
 
 from handdb.cli.export import app
+from handdb.export.placement import at_origin
 from handdb.export.rotations import CAMERA_TO_Y_UP
 from handdb.export.stored import read_stored_motion
 from handdb.hand.skeletons import load_skeleton
@@ -83,8 +84,25 @@ def test_export_usd_command(database, tmp_path, suffix):
     clip = open_skeleton(out)
     assert clip.stage.GetTimeCodesPerSecond() == 60.0
     stage_xyz = joint_world_positions(clip, len(motion.xyz))
-    np.testing.assert_allclose(stage_xyz, CAMERA_TO_Y_UP.apply(motion.xyz.reshape(-1, 3))
-                               .reshape(motion.xyz.shape), atol=1e-3)
+    np.testing.assert_allclose(stage_xyz, y_up(at_origin(motion.xyz, motion.skeleton)),
+                               atol=1e-3)
+    # On the floor, the wrist of frame 0 above the origin.
+    np.testing.assert_allclose(stage_xyz[0, motion.skeleton.root, [0, 2]], 0.0, atol=1e-3)
+    assert stage_xyz[..., 1].min() == pytest.approx(0.0, abs=1e-3)
+
+
+def y_up(xyz):
+    return CAMERA_TO_Y_UP.apply(xyz.reshape(-1, 3)).reshape(xyz.shape)
+
+
+def test_export_usd_in_camera_coordinates(database, tmp_path):
+    db, motion = database
+    out = tmp_path / "clip.usda"
+    result = CliRunner().invoke(app, ["export-usd", "--clip", CLIP_ID, "--out", str(out),
+                                      "--db", db, "--camera-frame"])
+    assert result.exit_code == 0, result.output
+    np.testing.assert_allclose(joint_world_positions(open_skeleton(out), len(motion.xyz)),
+                               y_up(motion.xyz), atol=1e-3)
 
 
 def test_export_bvh_command(database, tmp_path):
@@ -94,7 +112,7 @@ def test_export_bvh_command(database, tmp_path):
                                       "--db", db])
     assert result.exit_code == 0, result.output
     joints, _, values = parse_bvh(out.read_text())
-    tip = motion.xyz[:, motion.skeleton.index("index_tip")]
+    tip = at_origin(motion.xyz, motion.skeleton)[:, motion.skeleton.index("index_tip")]
     np.testing.assert_allclose(bvh_positions(joints, values)["index_tip"],
                                CAMERA_TO_Y_UP.apply(tip), atol=1e-3)
 
@@ -117,8 +135,8 @@ def test_export_usd_of_noisy_joints(tmp_path, keep_lengths):
         np.testing.assert_allclose(bones, np.broadcast_to(motion.bone_lengths[child],
                                                           bones.shape), atol=1e-3)
     else:
-        np.testing.assert_allclose(stage_xyz, CAMERA_TO_Y_UP.apply(
-            noisy.xyz.reshape(-1, 3)).reshape(noisy.xyz.shape), atol=1e-3)
+        np.testing.assert_allclose(stage_xyz, y_up(at_origin(noisy.xyz, motion.skeleton)),
+                                   atol=1e-3)
 
 
 def test_unknown_clip_and_wrong_suffix_are_reported(database, tmp_path):

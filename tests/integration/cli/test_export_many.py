@@ -12,6 +12,7 @@ from typer.testing import CliRunner
 from handdb.cli import app
 from handdb.export import FORMATS
 from handdb.export.bvh import depth_first_order
+from handdb.export.placement import at_origin
 from handdb.export.rotations import CAMERA_TO_Y_UP
 from handdb.hand.skeletons import frame_bone_lengths, load_skeleton
 from handdb.store.database import Store
@@ -137,7 +138,12 @@ def test_real_capture_exports_in_every_format(dhg_database, dhg_mm, tmp_path, na
     path = tmp_path / f"dhg{FORMATS[name].suffix}"
     assert result.stdout.split() == [str(path)]
     assert seconds < 10.0
-    expected = CAMERA_TO_Y_UP.apply(dhg_mm.reshape(-1, 3)).reshape(dhg_mm.shape)
+    expected = y_up(dhg_mm)
+    # The animation formats put the wrist of frame 0 at the origin and the hand on the floor.
+    placed = y_up(at_origin(dhg_mm, load_skeleton("dhg22")))
+    root = load_skeleton("dhg22").root
+    np.testing.assert_allclose(placed[0, root, [0, 2]], 0.0, atol=1e-9)
+    assert placed[..., 1].min() == pytest.approx(0.0, abs=1e-9)
     if name == "trc":
         trc = read_trc(path)
         assert (trc["fields"]["NumFrames"], trc["fields"]["DataRate"]) == ("95", "60")
@@ -152,11 +158,32 @@ def test_real_capture_exports_in_every_format(dhg_database, dhg_mm, tmp_path, na
         assert [j["name"] for j in joints if j["name"]] == [
             skeleton.joints[j] for j in depth_first_order(skeleton)]
     elif name == "glb":
-        np.testing.assert_allclose(open_gltf(path).joint_world_positions(), 1e-3 * expected,
+        np.testing.assert_allclose(open_gltf(path).joint_world_positions(), 1e-3 * placed,
                                    atol=FLOAT32_M)
     else:
-        np.testing.assert_allclose(joint_world_positions(open_skeleton(path), 95), expected,
+        np.testing.assert_allclose(joint_world_positions(open_skeleton(path), 95), placed,
                                    atol=1e-3)
+
+
+def y_up(xyz):
+    return CAMERA_TO_Y_UP.apply(xyz.reshape(-1, 3)).reshape(xyz.shape)
+
+
+@pytest.mark.parametrize(("flag", "name"), [("--camera-frame", "glb"), ("--at-origin", "trc")])
+def test_the_placement_flag_overrides_the_formats_default(database, tmp_path, flag, name):
+    db, motions = database
+    result = export("--db", db, "--format", name, "--out", tmp_path, flag, "alpha")
+    assert result.exit_code == 0, result.output
+    skeleton = load_skeleton("mediapipe21")
+    path = tmp_path / f"alpha{FORMATS[name].suffix}"
+    if name == "glb":
+        np.testing.assert_allclose(open_gltf(path).joint_world_positions(),
+                                   1e-3 * y_up(motions["alpha"]), atol=FLOAT32_M)
+    else:
+        xyz = read_trc(path)["xyz"]
+        np.testing.assert_allclose(xyz, y_up(at_origin(motions["alpha"], skeleton)), atol=1e-6)
+        np.testing.assert_allclose(xyz[0, skeleton.root, [0, 2]], 0.0, atol=1e-6)
+        assert np.nanmin(xyz[..., 1]) == pytest.approx(0.0, abs=1e-6)
 
 
 def test_a_built_database_exports_every_clip_from_the_command_line(demo_db, tmp_path):
@@ -179,5 +206,7 @@ def test_a_built_database_exports_every_clip_from_the_command_line(demo_db, tmp_
         xyz[rows["frame"], rows["joint_index"]] = np.column_stack([rows[a] for a in "xyz"])
         expected = CAMERA_TO_Y_UP.apply(xyz.reshape(-1, 3)).reshape(xyz.shape)
         np.testing.assert_allclose(trc["xyz"], expected, atol=1e-6)
+        skeleton = load_skeleton(query(demo_db, "SELECT skeleton FROM clips WHERE clip_id = "
+                                       f"'{clip_id}'").column(0)[0].as_py())
         gltf = open_gltf(tmp_path / "glb" / f"{clip_id}.glb").joint_world_positions()
-        np.testing.assert_allclose(gltf, 1e-3 * expected, atol=FLOAT32_M)
+        np.testing.assert_allclose(gltf, 1e-3 * y_up(at_origin(xyz, skeleton)), atol=FLOAT32_M)
