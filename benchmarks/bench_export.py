@@ -47,7 +47,8 @@ def main(n_frames: int) -> None:
         timed("export_clip_usd .usdc", n_frames, lambda: export_clip_usd(out / "c.usdc", **usd))
         timed("export_clip_usd .usda", n_frames, lambda: export_clip_usd(out / "c.usda", **usd))
         timed("export_clip_usd .usdz", n_frames, lambda: export_clip_usd(out / "c.usdz", **usd))
-        timed("export_clip_bvh", n_frames, lambda: export_clip_bvh(out / "c.bvh", **common))
+        timed("export_clip_bvh", n_frames, lambda: export_clip_bvh(out / "c.bvh", **common,
+                                                                 units=clip.units))
         frames = min(n_frames, SKINNED_FRAMES)
         timed("posed_vertices (skinning)", frames,
               lambda: posed_vertices(mesh, clip.xyz[:frames], skeleton, lengths))

@@ -19,8 +19,11 @@ Bones are rigid: they keep their measured directions and take the given lengths
 expect constant offsets.
 
 Axes and units: Y-up as in USD export (handdb's camera frame turned 180 degrees about
-``x``, :data:`handdb.export.rotations.CAMERA_TO_Y_UP`); lengths in the clip's units.
-``Frame Time`` is ``1 / fps`` seconds.
+``x``, :data:`handdb.export.rotations.CAMERA_TO_Y_UP`). BVH has no unit field (and no
+comment syntax to state one), and readers take its numbers in their own scene unit:
+Blender's importer (``global_scale=1``) reads them as metres, its scene unit. So every
+offset and position channel is in metres, whatever the clip's units, and a hand imports at
+its true size with the default settings. ``Frame Time`` is ``1 / fps`` seconds.
 """
 
 from __future__ import annotations
@@ -32,6 +35,8 @@ from pathlib import Path
 import numpy as np
 from scipy.spatial.transform import Rotation
 
+from handdb.checks import mm_per_unit
+from handdb.clip import METERS_PER_UNIT
 from handdb.errors import ParameterError, StageError
 from handdb.export.rotations import (
     CAMERA_TO_Y_UP,
@@ -82,7 +87,7 @@ def _hierarchy(skeleton: Skeleton, offsets: np.ndarray, bone_lengths: np.ndarray
         lines.extend([
             f"{pad}{keyword} {skeleton.joints[joint]}",
             f"{pad}{{",
-            f"{pad}{_INDENT}OFFSET {' '.join(f'{v:.6f}' for v in offsets[joint])}",
+            f"{pad}{_INDENT}OFFSET {' '.join(f'{v:.9f}' for v in offsets[joint])}",
             f"{pad}{_INDENT}CHANNELS {len(channels)} {' '.join(channels)}",
         ])
         children = skeleton.children(joint)
@@ -91,7 +96,7 @@ def _hierarchy(skeleton: Skeleton, offsets: np.ndarray, bone_lengths: np.ndarray
         if len(children) == 0:
             end = END_SITE_RATIO * bone_lengths[joint]
             lines.extend([f"{pad}{_INDENT}End Site", f"{pad}{_INDENT}{{",
-                          f"{pad}{_INDENT * 2}OFFSET 0.000000 {end:.6f} 0.000000",
+                          f"{pad}{_INDENT * 2}OFFSET 0.000000000 {end:.9f} 0.000000000",
                           f"{pad}{_INDENT}}}"])
         lines.append(f"{pad}}}")
 
@@ -137,6 +142,7 @@ def export_clip_bvh(
     xyz: np.ndarray,
     bone_lengths: np.ndarray,
     fps: float,
+    units: str,
     rotations: JointMotion | None = None,
 ) -> Path:
     """Write a clip's motion as a BVH file.
@@ -153,8 +159,12 @@ def export_clip_bvh(
         ``(J,) float64`` length of the bone ending at each joint, clip units.
     fps
         Frames per second, > 0.
+    units
+        Units of ``xyz`` and ``bone_lengths`` (``mm``, ``cm``, ``m`` or ``in``); the file
+        is in metres.
     rotations
-        Local joint transforms to export instead of those computed from ``xyz``.
+        Local joint transforms to export instead of those computed from ``xyz``, clip
+        units.
 
     Returns
     -------
@@ -167,6 +177,7 @@ def export_clip_bvh(
         If ``xyz`` has frames with missing joints (fill gaps first).
     """
     path = Path(path)
+    mm_per_unit(units)
     if not fps > 0:
         raise ParameterError(f"fps must be positive, got {fps}")
     bone_lengths = np.asarray(bone_lengths, dtype=np.float64)
@@ -176,12 +187,16 @@ def export_clip_bvh(
             raise StageError(f"{path}: {missing.sum()} of {len(xyz)} frames have joints "
                              "without a 3D position; fill the gaps before exporting")
         rotations = joint_rotations(xyz, skeleton, bone_lengths)
-    offsets = rest_pose(skeleton, bone_lengths).translations[0]
+    metres = METERS_PER_UNIT[units]
+    offsets = metres * rest_pose(skeleton, bone_lengths).translations[0]
     offsets[skeleton.root] = 0.0
-    channels = motion_channels(turn_root(rotations, skeleton, CAMERA_TO_Y_UP), skeleton)
+    turned = turn_root(rotations, skeleton, CAMERA_TO_Y_UP)
+    in_metres = JointMotion(turned.rotations, metres * turned.translations)
+    channels = motion_channels(in_metres, skeleton)
     text = io.StringIO()
-    text.write(_hierarchy(skeleton, offsets, bone_lengths))
+    text.write(_hierarchy(skeleton, offsets, metres * bone_lengths))
     text.write(f"MOTION\nFrames: {len(channels)}\nFrame Time: {1.0 / fps:.8f}\n")
-    np.savetxt(text, channels, fmt="%.6f")
+    # Nine significant digits: below a micrometre in metres, 1e-6 degree in angles.
+    np.savetxt(text, channels, fmt="%.9g")
     path.write_text(text.getvalue())
     return path

@@ -97,11 +97,12 @@ def write_usd(motion: StoredMotion, path: Path, options: ExportOptions) -> Path:
 
 
 def write_bvh(motion: StoredMotion, path: Path, options: ExportOptions) -> Path:
-    """Write ``motion`` as BVH (:mod:`handdb.export.bvh`); bones always keep their lengths."""
+    """Write ``motion`` as BVH in metres (:mod:`handdb.export.bvh`); rigid bones."""
     from handdb.export.bvh import export_clip_bvh
 
     return export_clip_bvh(path, skeleton=motion.skeleton, xyz=motion.xyz,
-                           bone_lengths=motion.bone_lengths, fps=motion.fps)
+                           bone_lengths=motion.bone_lengths, fps=motion.fps,
+                           units=motion.units)
 
 
 def write_glb(motion: StoredMotion, path: Path, options: ExportOptions) -> Path:

@@ -1,11 +1,13 @@
 """Import a USD, glTF or FBX file into Blender (bpy); describe what Blender made of it, as JSON.
 
 Run with Blender's Python: ``python blender_import.py CLIP FRAME [FRAME ...] [--fps FPS]``
-(CLIP a ``.usd*``, ``.glb`` or ``.fbx`` file; FBX keys are imported from frame 0, not
-Blender's default 1). Prints one JSON object: the armature's bone names, the
-frame range of its action, and the world position of every bone's head at each FRAME
-(Blender units, Blender's Z-up world). glTF keys its animation in seconds and Blender's
-importer converts them to frames at the scene's rate: ``--fps`` sets that rate first.
+(CLIP a ``.usd*``, ``.glb``, ``.fbx`` or ``.bvh`` file; FBX keys are imported from frame
+0, not Blender's default 1; BVH with the importer's defaults: scale 1, and the first frame
+at Blender's frame 1, the earliest its importer allows). Prints one JSON object: the
+armature's bone names, the name and frame range of its action, and the world position of
+every bone's head at each FRAME (Blender units, Blender's Z-up world). glTF keys its
+animation in seconds and Blender's importer converts them to frames at the scene's rate:
+``--fps`` sets that rate first.
 """
 
 import argparse
@@ -22,6 +24,8 @@ def main(path: str, frames: list[int], fps: float | None = None) -> dict:
         bpy.ops.import_scene.gltf(filepath=path)
     elif path.endswith(".fbx"):
         bpy.ops.import_scene.fbx(filepath=path, anim_offset=0.0)
+    elif path.endswith(".bvh"):
+        bpy.ops.import_anim.bvh(filepath=path)
     else:
         bpy.ops.wm.usd_import(filepath=path)
     armatures = [o for o in bpy.data.objects if o.type == "ARMATURE"]

@@ -10,6 +10,7 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 from handdb.clip import METERS_PER_UNIT
+from handdb.export.bvh import export_clip_bvh
 from handdb.export.fbx import BLENDER_VARIABLE, export_clip_fbx
 from handdb.export.gltf import export_clip_gltf
 from handdb.export.rotations import CAMERA_TO_Y_UP, joint_rotations, motion_positions
@@ -94,3 +95,33 @@ def test_blender_imports_the_gltf_and_fbx_armature_and_animation(tmp_path, monke
     for frame in frames:
         heads = np.array([report["heads"][str(frame)][joint] for joint in motion.skeleton.joints])
         assert np.abs(heads - 1e-3 * to_blender.apply(expected[frame])).max() < tolerance
+
+
+def test_blender_imports_the_bvh_at_true_size_with_its_default_scale(tmp_path):
+    """BVH is in metres: Blender's importer at scale 1 puts every bone head where it was."""
+    motion = make_hinge_motion(load_skeleton("thesis21"), n_frames=30, seed=5)
+    units = "cm"
+    xyz = motion.xyz / 10.0                                  # the hinge motion is in mm
+    path = export_clip_bvh(tmp_path / "clip-01.bvh", skeleton=motion.skeleton, xyz=xyz,
+                           bone_lengths=motion.bone_lengths / 10.0, fps=motion.fps, units=units)
+    frames = [0, 11, len(xyz) - 1]
+    # Blender's BVH importer puts the file's first frame at frame 1 at the earliest.
+    run = subprocess.run([str(BLENDER_PYTHON), str(IMPORT_SCRIPT), str(path),
+                          *(str(frame + 1) for frame in frames)],
+                         capture_output=True, text=True, timeout=300, check=False)
+    assert run.returncode == 0, run.stderr[-2000:]
+    report = json.loads(run.stdout.strip().splitlines()[-1])
+    assert report["armatures"] == 1
+    assert sorted(report["bones"]) == sorted(motion.skeleton.joints)
+    assert report["action_frame_range"] == [1, len(xyz)]
+    assert report["action"] == "clip-01"                  # the file's name: the clip id
+    # Rigid bones: the joints the bones reach keeping their lengths, in metres.
+    expected = motion_positions(joint_rotations(xyz, motion.skeleton, motion.bone_lengths / 10.0,
+                                                keep_lengths=True), motion.skeleton)
+    to_blender = Y_UP_TO_BLENDER * CAMERA_TO_Y_UP
+    tolerance = 1e-4 * motion.bone_lengths[motion.bone_lengths > 0].min() * 1e-3
+    for frame in frames:
+        heads = np.array([report["heads"][str(frame + 1)][joint]
+                          for joint in motion.skeleton.joints])
+        assert np.abs(heads - METERS_PER_UNIT[units] * to_blender.apply(expected[frame])).max() \
+            < tolerance

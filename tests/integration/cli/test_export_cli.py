@@ -114,7 +114,7 @@ def test_export_bvh_command(database, tmp_path):
     joints, _, values = parse_bvh(out.read_text())
     tip = at_origin(motion.xyz, motion.skeleton)[:, motion.skeleton.index("index_tip")]
     np.testing.assert_allclose(bvh_positions(joints, values)["index_tip"],
-                               CAMERA_TO_Y_UP.apply(tip), atol=1e-3)
+                               1e-3 * CAMERA_TO_Y_UP.apply(tip), atol=1e-6)   # metres
 
 
 @pytest.mark.parametrize("keep_lengths", [False, True])

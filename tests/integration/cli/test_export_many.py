@@ -13,7 +13,8 @@ from handdb.cli import app
 from handdb.export import FORMATS
 from handdb.export.bvh import depth_first_order
 from handdb.export.placement import at_origin
-from handdb.export.rotations import CAMERA_TO_Y_UP
+from handdb.export.rotations import CAMERA_TO_Y_UP, joint_rotations, motion_positions
+from handdb.export.stored import read_stored_motion
 from handdb.hand.skeletons import frame_bone_lengths, load_skeleton
 from handdb.store.database import Store
 from handdb.store.query import query
@@ -21,7 +22,7 @@ from tests.integration.cli.test_export_cli import write_database
 from tests.support.gltf_reading import open_gltf
 from tests.support.motions import make_hinge_motion
 from tests.support.usd_reading import joint_world_positions, open_skeleton
-from tests.unit.export.test_bvh import parse_bvh
+from tests.unit.export.test_bvh import bvh_positions, parse_bvh
 from tests.unit.export.test_c3d_export import FLOAT32_MM, read_with_c3d_package
 from tests.unit.export.test_gltf import FLOAT32_M
 from tests.unit.export.test_trc import read_trc
@@ -157,6 +158,15 @@ def test_real_capture_exports_in_every_format(dhg_database, dhg_mm, tmp_path, na
         assert len(values) == 95
         assert [j["name"] for j in joints if j["name"]] == [
             skeleton.joints[j] for j in depth_first_order(skeleton)]
+        # Metres, rigid bones: the joints the bones reach keeping their stored lengths.
+        positions = bvh_positions(joints, values)
+        read = np.stack([positions[name] for name in skeleton.joints], axis=1)
+        lengths = read_stored_motion(dhg_database, "dhg").bone_lengths
+        rigid = motion_positions(joint_rotations(at_origin(dhg_mm, skeleton), skeleton,
+                                                 lengths, keep_lengths=True), skeleton)
+        np.testing.assert_allclose(read, 1e-3 * y_up(rigid), atol=1e-6)
+        np.testing.assert_allclose(read[:, skeleton.root], 1e-3 * placed[:, skeleton.root],
+                                   atol=1e-6)
     elif name == "glb":
         np.testing.assert_allclose(open_gltf(path).joint_world_positions(), 1e-3 * placed,
                                    atol=FLOAT32_M)

@@ -2,6 +2,7 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
+from handdb.clip import METERS_PER_UNIT
 from handdb.export.bvh import export_clip_bvh
 from handdb.export.rotations import CAMERA_TO_Y_UP
 from handdb.hand.skeletons import load_skeleton
@@ -68,19 +69,22 @@ def bvh_positions(joints, values):
     return {j["name"]: position[i] for i, j in enumerate(joints) if j["name"]}
 
 
-@pytest.mark.parametrize("name", ["mediapipe21", "thesis21", "dhg22"])
-def test_bvh_round_trip_reproduces_the_joints(tmp_path, name):
+@pytest.mark.parametrize(("name", "units"), [("mediapipe21", "mm"), ("thesis21", "cm"),
+                                             ("dhg22", "m")])
+def test_bvh_round_trip_reproduces_the_joints_in_metres(tmp_path, name, units):
+    """The file is in metres whatever the clip's units (the clip's numbers read as ``units``)."""
     motion = make_hinge_motion(load_skeleton(name), n_frames=30)
     path = export_clip_bvh(tmp_path / "clip.bvh", skeleton=motion.skeleton, xyz=motion.xyz,
-                           bone_lengths=motion.bone_lengths, fps=motion.fps)
+                           bone_lengths=motion.bone_lengths, fps=motion.fps, units=units)
     joints, frame_time, values = parse_bvh(path.read_text())
     assert frame_time == pytest.approx(1 / motion.fps)
     assert len(values) == len(motion.xyz)
     positions = bvh_positions(joints, values)
     assert set(positions) == set(motion.skeleton.joints)
-    tolerance = 1e-4 * motion.bone_lengths[motion.bone_lengths > 0].min()
+    metres = METERS_PER_UNIT[units]
+    tolerance = 1e-4 * motion.bone_lengths[motion.bone_lengths > 0].min() * metres
     for j, joint in enumerate(motion.skeleton.joints):
-        expected = CAMERA_TO_Y_UP.apply(motion.xyz[:, j])
+        expected = metres * CAMERA_TO_Y_UP.apply(motion.xyz[:, j])
         assert np.abs(positions[joint] - expected).max() < tolerance, joint
 
 
@@ -88,12 +92,12 @@ def test_finger_offsets_are_bone_lengths_and_hinges_use_one_channel(tmp_path):
     motion = make_hinge_motion(load_skeleton("mediapipe21"), n_frames=30)
     skeleton = motion.skeleton
     path = export_clip_bvh(tmp_path / "clip.bvh", skeleton=skeleton, xyz=motion.xyz,
-                           bone_lengths=motion.bone_lengths, fps=motion.fps)
+                           bone_lengths=motion.bone_lengths, fps=motion.fps, units="mm")
     joints, _, values = parse_bvh(path.read_text())
     named = {j["name"]: j for j in joints if j["name"]}
     pip = named["index_pip"]
     pip_length = motion.bone_lengths[skeleton.index("index_pip")]
-    np.testing.assert_allclose(pip["offset"], [0, pip_length, 0], atol=1e-6)
+    np.testing.assert_allclose(pip["offset"], [0, 1e-3 * pip_length, 0], atol=1e-9)
     assert pip["channels"] == ["Xrotation", "Zrotation", "Yrotation"]
     assert named["index_mcp"]["channels"][:3] == ["Xposition", "Yposition", "Zposition"]
     start = sum(len(j["channels"]) for j in joints[:joints.index(pip)])
