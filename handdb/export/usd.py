@@ -5,8 +5,9 @@ Layout of the exported stage (``<Hand>`` is ``RightHand`` or ``LeftHand``)::
     /<Hand>            SkelRoot (default prim; customData handdb:clipId, handdb:hand)
     /<Hand>/Skeleton   Skeleton: joints, bindTransforms, restTransforms;
                        SkelBindingAPI with skel:animationSource -> Animation
-    /<Hand>/Animation  SkelAnimation: translations, rotations at every frame (a
-                       channel equal at every frame once, as its default), scales once
+    /<Hand>/<clip>     SkelAnimation named after the clip (:func:`animation_name`):
+                       translations, rotations at every frame (a channel equal at
+                       every frame once, as its default), scales once
     /<Hand>/Mesh       Mesh of capsules and palm, SkelBindingAPI bound to the Skeleton
 
 Axes. handdb's 3D frame is the camera's: ``x`` right, ``y`` down, ``z`` away from the
@@ -31,6 +32,7 @@ measured directions). The bind and rest pose is the average hand of
 from __future__ import annotations
 
 import os
+import re
 import tempfile
 import threading
 from pathlib import Path
@@ -72,6 +74,24 @@ def joint_paths(skeleton: Skeleton) -> list[str]:
     for joint, parent in zip(skeleton.joints, skeleton.parents, strict=True):
         paths.append(joint if parent < 0 else f"{paths[parent]}/{joint}")
     return paths
+
+
+#: Children of the SkelRoot besides the animation, whose names it must not take.
+_SKEL_ROOT_CHILDREN = ("Skeleton", "Mesh")
+
+
+def animation_name(clip_id: str) -> str:
+    """Name of the clip's ``SkelAnimation`` prim: the clip id as a valid USD identifier.
+
+    Every character but ASCII letters, digits and ``_`` becomes ``_``, a leading digit (or
+    an empty id) gets a ``_`` in front, and an id equal to another child of the SkelRoot
+    (``Skeleton``, ``Mesh``) gets ``_Animation`` after it, so ``"rapid-s01"`` is
+    ``rapid_s01`` and ``"01"`` is ``_01``. Blender names the imported action after it.
+    """
+    name = re.sub(r"[^A-Za-z0-9_]", "_", clip_id)
+    if not name or name[0].isdigit():
+        name = f"_{name}"
+    return f"{name}_Animation" if name in _SKEL_ROOT_CHILDREN else name
 
 
 def _new_stage() -> Usd.Stage:
@@ -177,7 +197,8 @@ def build_clip_stage(
     Parameters
     ----------
     clip_id
-        The clip's id, recorded as the SkelRoot's ``handdb:clipId`` custom data.
+        The clip's id, recorded as the SkelRoot's ``handdb:clipId`` custom data; the
+        SkelAnimation is named after it (:func:`animation_name`).
     skeleton
         Skeleton of the motion.
     motion
@@ -212,7 +233,7 @@ def build_clip_stage(
     skel.CreateBindTransformsAttr(_usd_matrices(bind_orientations[0], bind_positions[0]))
     skel.CreateRestTransformsAttr(_usd_matrices(rest_local, rest.translations[0]))
 
-    anim = UsdSkel.Animation.Define(stage, root.GetPath().AppendChild("Animation"))
+    anim = UsdSkel.Animation.Define(stage, root.GetPath().AppendChild(animation_name(clip_id)))
     anim.CreateJointsAttr(joints)
     _author_animation(anim, turn_root(motion, skeleton, CAMERA_TO_Y_UP))
     UsdSkel.BindingAPI.Apply(skel.GetPrim()).CreateAnimationSourceRel().SetTargets(

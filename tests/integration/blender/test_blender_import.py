@@ -51,6 +51,7 @@ def test_blender_imports_an_animated_armature(tmp_path, suffix, noise_mm):
     assert report["armatures"] == 1
     assert report["bones"] == list(motion.skeleton.joints)
     assert report["action_frame_range"] == [0, len(motion.xyz) - 1]
+    assert report["action"] == "clip_01"         # the SkelAnimation, named after the clip
     assert [m["armature_modifier"] for m in report["meshes"]] == [True]
 
     to_blender = Y_UP_TO_BLENDER * CAMERA_TO_Y_UP

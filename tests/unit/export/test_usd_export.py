@@ -1,12 +1,12 @@
 import numpy as np
 import pytest
-from pxr import Usd, UsdGeom, UsdSkel
+from pxr import Sdf, Usd, UsdGeom, UsdSkel
 
 from handdb.clip import METERS_PER_UNIT
 from handdb.errors import StageError
 from handdb.export.mesh import hand_mesh, posed_vertices
 from handdb.export.rotations import CAMERA_TO_Y_UP, rest_pose, rest_positions
-from handdb.export.usd import export_clip_usd, joint_paths
+from handdb.export.usd import animation_name, export_clip_usd, joint_paths
 from handdb.hand.skeletons import load_skeleton
 from tests.support.motions import make_hinge_motion
 from tests.support.usd_reading import joint_world_positions, open_skeleton, validation_errors
@@ -62,7 +62,7 @@ def test_skeleton_and_animation_layout(mediapipe_motion, tmp_path):
         assert parent == "" or joints.index(parent) < i
     assert [p.rpartition("/")[2] for p in joints] == list(skeleton.joints)
     assert len(skel.GetBindTransformsAttr().Get()) == len(skel.GetRestTransformsAttr().Get()) == 21
-    anim = UsdSkel.Animation(stage.GetPrimAtPath("/RightHand/Animation"))
+    anim = UsdSkel.Animation(stage.GetPrimAtPath("/RightHand/clip_01"))
     source = UsdSkel.BindingAPI(skel.GetPrim()).GetAnimationSourceRel()
     assert source.GetTargets() == [anim.GetPath()]
     frames = list(range(len(mediapipe_motion.xyz)))
@@ -81,7 +81,7 @@ def test_a_constant_channel_is_written_once(mediapipe_motion, tmp_path):
     xyz = mediapipe_motion.xyz - mediapipe_motion.xyz[:, [skeleton.root]]
     path = export(mediapipe_motion, tmp_path / "c.usda", xyz=xyz, keep_lengths=True)
     clip = open_skeleton(path)
-    anim = UsdSkel.Animation(clip.stage.GetPrimAtPath("/RightHand/Animation"))
+    anim = UsdSkel.Animation(clip.stage.GetPrimAtPath("/RightHand/clip_01"))
     assert anim.GetTranslationsAttr().GetTimeSamples() == []
     assert len(anim.GetRotationsAttr().GetTimeSamples()) == len(xyz)
     stage_xyz = joint_world_positions(clip, len(xyz))
@@ -144,3 +144,11 @@ def test_missing_positions_and_bad_arguments_are_refused(mediapipe_motion, tmp_p
     with pytest.raises(ValueError, match="units"):
         export(mediapipe_motion, tmp_path / "c.usd", units="ft")
     assert not any(tmp_path.iterdir())
+
+
+@pytest.mark.parametrize(("clip_id", "name"), [
+    ("clip-01", "clip_01"), ("rapid.s01 take 2", "rapid_s01_take_2"), ("01", "_01"),
+    ("Mesh", "Mesh_Animation"), ("", "_"), ("prise-é", "prise__")])
+def test_the_animation_is_named_after_the_clip(clip_id, name):
+    assert animation_name(clip_id) == name
+    assert Sdf.Path.IsValidIdentifier(name)
