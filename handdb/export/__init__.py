@@ -14,7 +14,7 @@ from handdb.export.formats import FORMATS, ExportFormat, register_format
 
 #: Version of the USD, preview and chart files. Raise it when a change alters the output; it
 #: enters the build keys (:mod:`handdb.build.keys`), a docstring edit or a speed-up does not.
-VERSION = 1
+VERSION = 2
 
 for _entry in (
     ExportFormat("usd", (".usd", ".usdc", ".usda"), "handdb.export.stored:write_usd",
