@@ -1,11 +1,23 @@
 """A skinned hand mesh: a capsule per finger bone and a rounded palm, posed by skinning.
 
 The mesh is built in the rest pose of :func:`handdb.export.rotations.rest_positions` (a flat hand,
-fingers along ``+Y``), sized from the bone lengths. Every finger bone whose parent joint
-aims at it gets a capsule bound to that parent joint, blending into the grandparent joint
-over one radius around the knuckle so joints bend smoothly. The palm is the convex hull of
-spheres around the palm root and its children (wrist, MCPs, thumb base), bound rigidly to
-the root. Each vertex has :data:`INFLUENCES` joint influences whose weights sum to 1.
+fingers along ``+Y``, thumb towards ``+X``, palm normal ``+Z``), sized from the bone lengths.
+
+Sizes scale with the hand's knuckle span ``W``, the distance between the index and little
+MCPs (about 50 mm in an adult hand, whatever the skeleton), not with each finger's own
+bones: a skeleton whose little finger or thumb has short bones (``thesis21``) still gets
+fingers of a hand's proportions. A finger's capsule radius is :data:`FINGER_RADIUS_RATIO`
+of ``W`` times its :data:`FINGER_RADIUS_SCALE` (four fingers side by side then span the
+knuckles, as a hand's do). Every finger bone whose parent joint aims at it gets a capsule
+bound to that parent joint, blending into the grandparent joint over one radius around
+the knuckle so joints bend smoothly.
+
+The palm is the convex hull of spheres of radius :data:`PALM_RADIUS_RATIO` ``W`` (the palm
+about ``0.56 W`` thick) around the palm root and its children (wrist, MCPs, thumb base)
+and around two heel points beside the wrist, :data:`HEEL_HALF_WIDTH_RATIO` ``W`` to either
+side along the palm's ``X``, so the palm keeps its breadth down to the wrist instead of
+narrowing to it as a cone; bound rigidly to the root. Each vertex has :data:`INFLUENCES`
+joint influences whose weights sum to 1.
 
 Posing uses linear blend skinning with the joint transforms of
 :mod:`handdb.export.rotations`, so a posed mesh follows the same skeleton that is exported to USD.
@@ -21,6 +33,7 @@ import trimesh
 from handdb.export.rotations import (
     child_counts,
     joint_rotations,
+    palm_joints,
     rest_pose,
     rest_positions,
     world_transforms,
@@ -30,11 +43,18 @@ from handdb.hand.skeletons import Skeleton
 #: Joint influences per vertex.
 INFLUENCES = 2
 
-#: Capsule radius of a finger as a fraction of the mean length of its capsule bones.
-FINGER_RADIUS_RATIO = 0.28
+#: Capsule radius of a finger as a fraction of the knuckle span ``W`` (index to little MCP).
+FINGER_RADIUS_RATIO = 1.0 / 6.0
 
-#: Radius of the palm's rounded edge as a multiple of the mean finger radius.
-PALM_RADIUS_RATIO = 1.2
+#: Each finger's radius relative to :data:`FINGER_RADIUS_RATIO` (a finger not listed: 1).
+FINGER_RADIUS_SCALE = {"thumb": 1.1, "index": 1.0, "middle": 1.0, "ring": 0.95,
+                       "little": 0.85}
+
+#: Radius of the palm's spheres (half its thickness) as a fraction of ``W``.
+PALM_RADIUS_RATIO = 0.28
+
+#: Distance of each heel point from the wrist, along the palm's ``X``, as a fraction of ``W``.
+HEEL_HALF_WIDTH_RATIO = 0.35
 
 #: Rings along and segments around each capsule (trimesh's ``count``).
 CAPSULE_COUNT = (10, 8)
@@ -83,12 +103,23 @@ def _capsule_bones(skeleton: Skeleton) -> np.ndarray:
     return skeleton.bones[child_counts(skeleton)[skeleton.bones[:, 0]] == 1]
 
 
-def _finger_radii(skeleton: Skeleton, bone_lengths: np.ndarray, bones: np.ndarray) -> dict:
-    fingers = np.array([skeleton.fingers[c] for c in bones[:, 1]])
-    return {
-        f: FINGER_RADIUS_RATIO * bone_lengths[bones[fingers == f, 1]].mean()
-        for f in np.unique(fingers)
-    }
+def knuckle_span(skeleton: Skeleton, rest: np.ndarray) -> float:
+    """``W``: the distance between the index and little MCPs of ``rest``, its units.
+
+    Raises
+    ------
+    SkeletonError
+        If the skeleton lacks a wrist or a finger's MCP
+        (:func:`handdb.export.rotations.palm_joints`).
+    """
+    _, mcps = palm_joints(skeleton)
+    return float(np.linalg.norm(rest[mcps[0]] - rest[mcps[-1]]))
+
+
+def finger_radii(skeleton: Skeleton, span: float) -> dict[str, float]:
+    """Capsule radius of each finger with capsule bones, ``span`` (``W``) units."""
+    fingers = {skeleton.fingers[c] for c in _capsule_bones(skeleton)[:, 1]}
+    return {f: FINGER_RADIUS_RATIO * FINGER_RADIUS_SCALE.get(f, 1.0) * span for f in fingers}
 
 
 def _capsule(start: np.ndarray, end: np.ndarray, radius: float) -> trimesh.Trimesh:
@@ -118,7 +149,8 @@ def hand_mesh(skeleton: Skeleton, bone_lengths: np.ndarray) -> HandMesh:
     """
     rest = rest_positions(skeleton, bone_lengths)
     bones = _capsule_bones(skeleton)
-    radii = _finger_radii(skeleton, bone_lengths, bones)
+    span = knuckle_span(skeleton, rest)
+    radii = finger_radii(skeleton, span)
 
     parts, indices, weights, face_joints = [], [], [], []
     for parent, child in bones:
@@ -132,10 +164,13 @@ def hand_mesh(skeleton: Skeleton, bone_lengths: np.ndarray) -> HandMesh:
         weights.append(np.stack([own, 1.0 - own], axis=1))
         face_joints.append(np.full(len(capsule.faces), child))
 
-    palm_joints = np.append(skeleton.root, skeleton.children(skeleton.root))
-    palm_radius = PALM_RADIUS_RATIO * np.mean(list(radii.values()))
-    sphere = trimesh.creation.icosphere(subdivisions=PALM_SPHERE_SUBDIVISIONS, radius=palm_radius)
-    cloud = (rest[palm_joints, None, :] + sphere.vertices[None]).reshape(-1, 3)
+    wrist, _ = palm_joints(skeleton)
+    heel = rest[wrist] + np.outer([-1.0, 1.0], [HEEL_HALF_WIDTH_RATIO * span, 0.0, 0.0])
+    centres = np.concatenate(
+        [rest[np.append(skeleton.root, skeleton.children(skeleton.root))], heel])
+    sphere = trimesh.creation.icosphere(subdivisions=PALM_SPHERE_SUBDIVISIONS,
+                                        radius=PALM_RADIUS_RATIO * span)
+    cloud = (centres[:, None, :] + sphere.vertices[None]).reshape(-1, 3)
     palm = trimesh.convex.convex_hull(cloud)
     parts.append(palm)
     indices.append(np.tile([skeleton.root, skeleton.root], (len(palm.vertices), 1)))

@@ -120,7 +120,7 @@ def _frame_from_axes(x_hint: np.ndarray, y: np.ndarray, fallback_hint: np.ndarra
     return np.stack([x, y, np.cross(x, y)], axis=-1)
 
 
-def _palm_joints(skeleton: Skeleton) -> tuple[int, np.ndarray]:
+def palm_joints(skeleton: Skeleton) -> tuple[int, np.ndarray]:
     """Index of the wrist and of the MCPs of :data:`PALM_FINGERS`, thumb side first."""
     roles = np.array(skeleton.roles)
     fingers = np.array(skeleton.fingers)
@@ -151,7 +151,7 @@ def palm_frame(xyz: np.ndarray, skeleton: Skeleton) -> np.ndarray:
         thumb side), ``Y`` (wrist to the MCP centroid) and ``Z = X x Y`` in the frame of
         ``xyz``.
     """
-    wrist, mcps = _palm_joints(skeleton)
+    wrist, mcps = palm_joints(skeleton)
     y = xyz[:, mcps].mean(axis=1) - xyz[:, wrist]
     lateral = xyz[:, mcps[0]] - xyz[:, mcps[-1]]
     return _frame_from_axes(lateral, y, np.cross(y, [0.0, 0.0, 1.0]))

@@ -1,9 +1,11 @@
 import numpy as np
 import pytest
 
-from handdb.export.mesh import hand_mesh, posed_hand_mesh, posed_vertices
-from handdb.export.rotations import rest_positions
-from handdb.hand.skeletons import load_skeleton
+from handdb.clip import METERS_PER_UNIT
+from handdb.export.mesh import hand_mesh, knuckle_span, posed_hand_mesh, posed_vertices
+from handdb.export.rotations import palm_joints, rest_positions
+from handdb.hand.skeletons import bone_length_array, load_skeleton
+from handdb.synthetic import thesis_clench_clip
 from tests.support.motions import make_hinge_motion
 
 
@@ -72,3 +74,44 @@ def test_a_ray_at_a_fingertip_hits_that_finger():
     origin = rest[tip] + [0.0, -2.0, 500.0]
     _, _, faces = mesh.ray.intersects_location([origin], [[0.0, 0.0, -1.0]], multiple_hits=False)
     assert mesh.face_attributes["joint"][faces[0]] == tip
+
+
+def thesis_clench_lengths():
+    """The ``thesis21`` clip's own bone lengths (cm): short little-finger and thumb bones."""
+    clip = thesis_clench_clip()
+    skeleton = load_skeleton("thesis21")
+    return skeleton, np.nan_to_num(bone_length_array(skeleton, clip.bone_lengths,
+                                                     complete=True)), clip.units
+
+
+@pytest.mark.parametrize("hand", ["mediapipe21", "dhg22", "thesis21", "thesis21-clench"])
+def test_the_palm_and_fingers_have_a_hands_proportions(hand):
+    """A slab of a palm (thick at the knuckles, broad down to the wrist) and no slivers."""
+    if hand == "thesis21-clench":
+        skeleton, lengths, units = thesis_clench_lengths()
+    else:
+        motion = make_hinge_motion(load_skeleton(hand), n_frames=2)
+        skeleton, lengths, units = motion.skeleton, motion.bone_lengths, "mm"
+    mesh = hand_mesh(skeleton, lengths)
+    rest = rest_positions(skeleton, lengths)
+    span = knuckle_span(skeleton, rest)
+    wrist, mcps = palm_joints(skeleton)
+    np.testing.assert_allclose(span, np.linalg.norm(rest[mcps[0]] - rest[mcps[-1]]))
+
+    palm = mesh.vertices[np.unique(mesh.faces[mesh.face_joints == skeleton.root])]
+    at_knuckles = palm[np.abs(palm[:, 1] - rest[mcps, 1].mean()) < 0.1 * span]
+    at_wrist = palm[np.abs(palm[:, 1] - rest[wrist, 1]) < 0.1 * span]
+    assert np.ptp(at_knuckles[:, 2]) >= 0.5 * span               # thickness at the MCPs
+    assert np.ptp(at_knuckles[:, 0]) >= 1.3 * span               # breadth at the MCPs
+    assert np.ptp(at_wrist[:, 0]) >= 1.0 * span                  # not a cone to the wrist
+
+    mm = 1e3 * METERS_PER_UNIT[units]
+    for parent, child in skeleton.bones:
+        faces = mesh.faces[mesh.face_joints == child]
+        if len(faces) == 0:
+            continue
+        radius = point_segment_distance(mesh.vertices[np.unique(faces)], rest[parent],
+                                        rest[child]).max()
+        name = skeleton.joints[child]
+        assert radius >= 0.13 * span, name
+        assert radius * mm >= 5.5, name                          # no hair-thin finger
