@@ -16,6 +16,7 @@ from functools import cache
 from typing import Any
 
 import numpy as np
+import numpy.typing as npt
 import pyarrow as pa
 import pyarrow.compute as pc
 
@@ -150,14 +151,15 @@ def is_sorted(table: pa.Table, keys: tuple[str, ...]) -> bool:
     return bool(pc.all(in_order).as_py())
 
 
-def labels(names: Sequence[str], codes: np.ndarray, valid: np.ndarray | None = None
-           ) -> pa.Array:
+def labels(names: Sequence[str] | np.ndarray, codes: np.ndarray,
+           valid: npt.ArrayLike | None = None) -> pa.Array:
     """The string column ``names[codes]``, null where ``valid`` is ``False``.
 
     Parameters
     ----------
     names
-        The distinct strings (a skeleton's joints, the methods used).
+        The distinct strings (a skeleton's joints, the methods used), a sequence or a
+        numpy string array.
     codes
         ``(n,) int``: index into ``names`` of each row.
     valid
