@@ -7,7 +7,8 @@ in the exports' Y-up frame (:data:`handdb.export.rotations.CAMERA_TO_Y_UP`, ``(x
 (x, -y, -z)``):
 
 - the root joint (the wrist) at the first frame that places it is at ``x = z = 0``;
-- the lowest point of the clip, over every joint of every frame, is at ``y = 0``.
+- the lowest point of the clip, over every joint of every frame, is at ``y = 0`` (the
+  joints, which every format holds; a skinned mesh reaches a palm's half thickness lower).
 
 The motion itself (every relative position, every rotation) is unchanged.
 """

@@ -13,6 +13,7 @@ from handdb.clip import METERS_PER_UNIT
 from handdb.export.bvh import export_clip_bvh
 from handdb.export.fbx import BLENDER_VARIABLE, export_clip_fbx
 from handdb.export.gltf import export_clip_gltf
+from handdb.export.placement import at_origin
 from handdb.export.rotations import CAMERA_TO_Y_UP, joint_rotations, motion_positions
 from handdb.export.usd import export_clip_usd
 from handdb.hand.skeletons import load_skeleton
@@ -126,3 +127,22 @@ def test_blender_imports_the_bvh_at_true_size_with_its_default_scale(tmp_path):
                           for joint in motion.skeleton.joints])
         assert np.abs(heads - METERS_PER_UNIT[units] * to_blender.apply(expected[frame])).max() \
             < tolerance
+
+
+def test_a_hand_at_the_origin_stands_on_blenders_floor(tmp_path):
+    """``at_origin`` seen in Blender (Z up): the wrist of frame 0 above the origin, min z 0."""
+    motion = make_hinge_motion(load_skeleton("dhg22"), n_frames=20, seed=3)
+    xyz = at_origin(motion.xyz + [80.0, 150.0, 600.0], motion.skeleton)    # camera mm
+    path = export_clip_usd(tmp_path / "clip.usd", clip_id="clip-01", skeleton=motion.skeleton,
+                           xyz=xyz, bone_lengths=motion.bone_lengths, fps=motion.fps,
+                           units="mm", hand="right")
+    frames = list(range(len(xyz)))
+    run = subprocess.run([str(BLENDER_PYTHON), str(IMPORT_SCRIPT), str(path), *map(str, frames)],
+                         capture_output=True, text=True, timeout=300, check=False)
+    assert run.returncode == 0, run.stderr[-2000:]
+    heads = json.loads(run.stdout.strip().splitlines()[-1])["heads"]
+    everywhere = np.array([list(heads[str(frame)].values()) for frame in frames])
+    root = motion.skeleton.joints[motion.skeleton.root]
+    np.testing.assert_allclose(heads["0"][root][:2], 0.0, atol=1e-6)          # metres
+    assert everywhere[..., 2].min() == pytest.approx(0.0, abs=1e-6)
+    assert heads["0"][root][2] > 0.0
