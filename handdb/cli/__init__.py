@@ -338,13 +338,15 @@ def describe(
             grid.add_row(field.name, str(field.type), "yes" if field.nullable else "no", doc)
     elif name in derived_views():
         try:
-            columns = query(db, f"DESCRIBE {name}").to_pylist()
+            columns = query(db, "SELECT column_name, data_type, is_nullable, comment "
+                                f"FROM duckdb_columns() WHERE table_name = '{name}' "
+                                "ORDER BY column_index").to_pylist()
         except HanddbError as exc:
             print_error(exc)
             raise typer.Exit(EXIT_FAILED) from None
         for column in columns:
-            grid.add_row(column["column_name"], column["column_type"], column["null"].lower(),
-                         "")
+            grid.add_row(column["column_name"], column["data_type"],
+                         "yes" if column["is_nullable"] else "no", column["comment"] or "")
     else:
         print_error(UnknownNameError("table or view", name,
                                      (*tables.table_names(), *derived_views())))

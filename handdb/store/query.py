@@ -7,7 +7,10 @@ with no file yet is an empty view with the contract's columns, so every query th
 table works on any database. A file that is not readable Parquet (cut short, overwritten)
 is left out of its view with a :class:`~handdb.errors.DamagedFileWarning` naming it, so one
 damaged file never makes a whole table unreadable; the next build writes it again. Derived
-views in ``schemas/views/*.sql`` are created after the table views.
+views in ``schemas/views/*.sql`` are created after the table views, and after the macro
+``mm_per_unit(units)`` (millimetres per unit of a clip's length unit, from
+:data:`handdb.clip.METERS_PER_UNIT`) that the ``*_mm`` views use to put every clip's lengths
+in millimetres.
 
 A read-only connection (what :func:`query` and ``handdb sql`` use) is sealed with DuckDB's
 own settings once the views exist: external access is off, so no statement reads or writes
@@ -27,6 +30,7 @@ import pyarrow.dataset as ds
 import pyarrow.fs as pafs
 import pyarrow.parquet as pq
 
+from handdb.clip import METERS_PER_UNIT
 from handdb.errors import DamagedFileWarning, QueryError
 from handdb.paths import SCHEMAS_DIR
 from handdb.store import tables
@@ -80,6 +84,29 @@ def _quoted(text: str) -> str:
     return "'" + text.replace("'", "''") + "'"
 
 
+def unit_macro() -> str:
+    """``CREATE MACRO mm_per_unit(units)``: millimetres per unit of a length unit's name.
+
+    Made from :data:`handdb.clip.METERS_PER_UNIT`, so SQL and Python agree on every unit a
+    sidecar may name; an unknown name gives NULL, never a wrong length.
+    """
+    cases = " ".join(f"WHEN {_quoted(unit)} THEN {metres * 1000!r}"
+                     for unit, metres in METERS_PER_UNIT.items())
+    return f"CREATE OR REPLACE MACRO mm_per_unit(units) AS CASE units {cases} END"
+
+
+#: A derived view named ``<table>_mm`` is ``<table>`` with its lengths in millimetres.
+MM_SUFFIX = "_mm"
+
+
+def _in_millimetres(column: str, doc: str) -> str:
+    """A column's contract doc as it reads in a ``*_mm`` view, whose lengths are in mm."""
+    if column == "units":
+        return "mm: this view gives every length in millimetres"
+    return (doc.replace("clip units", "mm").replace("pixels per unit", "pixels per mm")
+            .replace(", units;", ", mm;"))
+
+
 @cache
 def derived_views() -> dict[str, str]:
     """The derived views of ``schemas/views``: name -> what the comment opening it says."""
@@ -97,6 +124,13 @@ def comment_statements() -> str:
     """
     statements = [f"COMMENT ON VIEW {name} IS {_quoted(text)}"
                   for name, text in derived_views().items()]
+    for name in derived_views():
+        base = name.removesuffix(MM_SUFFIX)
+        if name.endswith(MM_SUFFIX) and base in tables.table_names():
+            statements += [
+                f"COMMENT ON COLUMN {name}.{field.name} IS "
+                f"{_quoted(_in_millimetres(field.name, field.metadata[b'doc'].decode()))}"
+                for field in tables.schema(base) if field.metadata and field.metadata.get(b"doc")]
     for name in tables.table_names():
         spec = tables.table_spec(name)
         statements.append(f"COMMENT ON VIEW {name} IS {_quoted(spec.description)}")
@@ -125,6 +159,7 @@ def connect(db: str | Store, *, database: str = ":memory:", read_only: bool = Fa
     con = duckdb.connect(database)
     for name in tables.table_names():
         con.from_arrow(table_rows(store, name)).create_view(name, replace=True)
+    con.execute(unit_macro())
     for sql in sorted(VIEWS_DIR.glob("*.sql")):
         con.execute(sql.read_text())
     con.execute(comment_statements())

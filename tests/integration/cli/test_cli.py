@@ -10,6 +10,7 @@ from typer.testing import CliRunner
 from handdb.cli import EXIT_QUARANTINED, app
 from handdb.store import tables
 from handdb.store.database import Store
+from handdb.store.query import derived_views
 
 runner = CliRunner()
 
@@ -141,6 +142,14 @@ def test_describe_prints_a_tables_columns_with_their_docs():
     assert unknown.exit_code == 1 and "joints_3d" in unknown.output
 
 
+def test_describe_gives_an_mm_views_columns_their_docs_in_mm(db):
+    result = runner.invoke(app, ["describe", "joints_3d_mm", "--db", db])
+    assert result.exit_code == 0, result.output
+    for field in tables.schema("joints_3d"):
+        assert field.name in result.stdout
+    assert "pixels per mm" in result.stdout and "clip units" not in result.stdout
+
+
 def test_views_carry_the_contracts_comments_and_show_tables_lists_no_internals(db):
     result = runner.invoke(app, ["sql", "--db", db, "-f", "json",
                                  "SELECT comment FROM duckdb_columns() WHERE "
@@ -149,4 +158,5 @@ def test_views_carry_the_contracts_comments_and_show_tables_lists_no_internals(d
     assert row["comment"] == tables.schema("truth_3d").field("x").metadata[b"doc"].decode()
     shown = runner.invoke(app, ["sql", "--db", db, "-f", "csv", "SHOW TABLES"])
     names = shown.stdout.split()[1:]
-    assert sorted(names) == sorted([*tables.table_names(), "clip_summary", "depth_error"])
+    assert sorted(names) == sorted([*tables.table_names(), *derived_views()])
+    assert {"clip_summary", "depth_error", "joints_3d_mm"} <= set(derived_views())
