@@ -7,10 +7,10 @@ with no file yet is an empty view with the contract's columns, so every query th
 table works on any database. A file that is not readable Parquet (cut short, overwritten)
 is left out of its view with a :class:`~handdb.errors.DamagedFileWarning` naming it, so one
 damaged file never makes a whole table unreadable; the next build writes it again. Derived
-views in ``schemas/views/*.sql`` are created after the table views, and after the macro
-``mm_per_unit(units)`` (millimetres per unit of a clip's length unit, from
-:data:`handdb.clip.METERS_PER_UNIT`) that the ``*_mm`` views use to put every clip's lengths
-in millimetres.
+views in ``schemas/views/*.sql`` are created after the table views and the macros of
+:func:`macro_statements`: ``mm_per_unit(units)``, which the ``*_mm`` views use to put every
+clip's lengths in millimetres, and ``finger_rank(finger)``, to list fingers in anatomical
+order.
 
 A read-only connection (what :func:`query` and ``handdb sql`` use) is sealed with DuckDB's
 own settings once the views exist: external access is off, so no statement reads or writes
@@ -32,6 +32,7 @@ import pyarrow.parquet as pq
 
 from handdb.clip import METERS_PER_UNIT
 from handdb.errors import DamagedFileWarning, QueryError
+from handdb.hand.skeletons import FINGERS
 from handdb.paths import SCHEMAS_DIR
 from handdb.store import tables
 from handdb.store.database import DAMAGE_ERRORS, Store
@@ -84,15 +85,22 @@ def _quoted(text: str) -> str:
     return "'" + text.replace("'", "''") + "'"
 
 
-def unit_macro() -> str:
-    """``CREATE MACRO mm_per_unit(units)``: millimetres per unit of a length unit's name.
+def macro_statements() -> str:
+    """``CREATE MACRO`` statements for what the views and queries need from Python's tables.
 
-    Made from :data:`handdb.clip.METERS_PER_UNIT`, so SQL and Python agree on every unit a
-    sidecar may name; an unknown name gives NULL, never a wrong length.
+    ``mm_per_unit(units)``: millimetres per unit of a length unit's name, made from
+    :data:`handdb.clip.METERS_PER_UNIT` so SQL and Python agree on every unit a sidecar may
+    name; an unknown name gives NULL, never a wrong length.
+    ``finger_rank(finger)``: a finger's place from the thumb (0) to the little finger (4),
+    :data:`handdb.hand.skeletons.FINGERS`, then ``palm``; ``ORDER BY finger_rank(finger)``
+    lists fingers in anatomical order rather than alphabetically.
     """
-    cases = " ".join(f"WHEN {_quoted(unit)} THEN {metres * 1000!r}"
+    units = " ".join(f"WHEN {_quoted(unit)} THEN {metres * 1000!r}::DOUBLE"
                      for unit, metres in METERS_PER_UNIT.items())
-    return f"CREATE OR REPLACE MACRO mm_per_unit(units) AS CASE units {cases} END"
+    fingers = " ".join(f"WHEN {_quoted(finger)} THEN {rank}"
+                       for rank, finger in enumerate((*FINGERS, "palm")))
+    return (f"CREATE OR REPLACE MACRO mm_per_unit(units) AS CASE units {units} END;\n"
+            f"CREATE OR REPLACE MACRO finger_rank(finger) AS CASE finger {fingers} END;")
 
 
 #: A derived view named ``<table>_mm`` is ``<table>`` with its lengths in millimetres.
@@ -159,7 +167,7 @@ def connect(db: str | Store, *, database: str = ":memory:", read_only: bool = Fa
     con = duckdb.connect(database)
     for name in tables.table_names():
         con.from_arrow(table_rows(store, name)).create_view(name, replace=True)
-    con.execute(unit_macro())
+    con.execute(macro_statements())
     for sql in sorted(VIEWS_DIR.glob("*.sql")):
         con.execute(sql.read_text())
     con.execute(comment_statements())

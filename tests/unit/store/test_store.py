@@ -131,3 +131,18 @@ def test_store_reads_back_in_contract_order(tmp_path):
     store = Store(str(tmp_path / "db"))
     store.write("truth_3d", "a", truth_rows("a", 3))
     assert store.read_table("truth_3d").schema == tables.schema("truth_3d")
+
+
+def test_macros_order_fingers_anatomically_and_scale_units_to_mm(tmp_path):
+    from handdb.clip import METERS_PER_UNIT
+    from handdb.hand.skeletons import FINGERS
+
+    store = Store(str(tmp_path / "db"))
+    store.commit_clip("a", {"clips": clip_row("a")})
+    with connect(store) as con:
+        fingers = con.sql("SELECT f FROM (VALUES ('little'), ('index'), ('ring'), ('thumb'), "
+                          "('palm'), ('middle')) AS t(f) ORDER BY finger_rank(f)").fetchall()
+        scale = {unit: con.execute("SELECT mm_per_unit(?)", [unit]).fetchone()[0]
+                 for unit in (*METERS_PER_UNIT, "furlong")}
+    assert [f for (f,) in fingers] == [*FINGERS, "palm"]
+    assert scale == {"mm": 1.0, "cm": 10.0, "m": 1000.0, "in": 25.4, "furlong": None}
