@@ -277,8 +277,9 @@ def export(result: ClipResult, store: Store, options: BuildOptions) -> ClipResul
                               units=spec.units, hand=spec.hand, rotations=rotations)
         usd_path = _put(store, usd, USD_DIR, usd.name)
         # the labelled sheet costs 15 times the thumbnail: `handdb preview` draws it
-        preview = write_thumbnail_png(scratch_dir / "preview.png", skeleton=clip.skeleton,
-                                      xyz=lifted.xyz)
+        preview = write_thumbnail_png(
+            scratch_dir / "preview.png", skeleton=clip.skeleton, xyz=lifted.xyz,
+            filled=None if result.fill is None else result.fill.filled, truth=clip.truth)
         _put(store, preview, REPORTS_DIR, clip.clip_id, "preview.png")
         if result.validation is not None:
             chart = scratch_dir / "depth.png"

@@ -3,7 +3,8 @@
 The build stores a text-free thumbnail per clip (``reports/<clip>/preview.png``, see
 :mod:`handdb.export.thumbnail`); this command draws the labelled sheet of
 :func:`handdb.export.preview.write_preview_png` (title, frame times, axes in the clip's
-units, finger legend) from the clip's ``joints_3d`` rows.
+units, finger legend; filled joints marked, the ground truth faint beneath when the clip
+has it) from the clip's ``joints_3d`` and ``truth_3d`` rows.
 """
 
 from __future__ import annotations
@@ -31,10 +32,11 @@ def preview(clip: Clip, out: Out, db: Db = DEFAULT_DB,
         raise typer.BadParameter(f"'{out}' must end in .png", param_hint="--out")
     from handdb.export.preview import write_preview_png
     from handdb.hand.skeletons import load_skeleton
-    from handdb.store.dataset import load_clip
+    from handdb.store.dataset import load_clip, load_truth
 
     try:
         dataset = load_clip(db, clip)
+        truth = load_truth(db, clip, dataset.position.shape[:2])
     except HanddbError as exc:
         typer.echo(f"error: {exc}", err=True)
         raise typer.Exit(1) from None
@@ -42,5 +44,6 @@ def preview(clip: Clip, out: Out, db: Db = DEFAULT_DB,
     method = f" ({attrs['lift_method']})" if "lift_method" in attrs else ""
     written = write_preview_png(out, skeleton=load_skeleton(attrs["skeleton"]),
                                 xyz=dataset.position.values, units=attrs["units"],
-                                fps=attrs["fps"], title=f"{clip}{method}", count=frames)
+                                fps=attrs["fps"], title=f"{clip}{method}", count=frames,
+                                filled=dataset.filled.values, truth=truth)
     typer.echo(str(written))

@@ -29,8 +29,11 @@ from matplotlib.ticker import MaxNLocator
 
 from handdb.export.sheet import (
     DEFAULT_PREVIEW_FRAMES,
+    FILLED_COLOUR,
     FINGER_COLOURS,
+    TRUTH_COLOUR,
     VIEWS,
+    aligned_truth,
     preview_frames,
     view_box,
 )
@@ -75,6 +78,8 @@ def write_preview_png(
     title: str = "",
     fps: float | None = None,
     count: int = DEFAULT_PREVIEW_FRAMES,
+    filled: np.ndarray | None = None,
+    truth: np.ndarray | None = None,
 ) -> Path:
     """Draw a contact sheet of ``count`` frames of ``xyz`` and save it as PNG.
 
@@ -95,6 +100,12 @@ def write_preview_png(
         Frames per second; when given, panels show the time of their frame.
     count
         Frames to show.
+    filled
+        ``(T, J) bool``: the joints that were missing and gap-filled, drawn as magenta
+        rings (:data:`~handdb.export.sheet.FILLED_COLOUR`); ``None``: none.
+    truth
+        Ground truth ``(T, J, 3) float64``, clip units, or ``None``; its bones are drawn
+        faintly beneath, root on the clip's root (:func:`~handdb.export.sheet.aligned_truth`).
 
     Returns
     -------
@@ -112,14 +123,28 @@ def write_preview_png(
     drawn = np.isfinite(poses[:, skeleton.bones]).all(axis=(-2, -1))  # (k, B)
     bone_colours = np.array([FINGER_COLOURS[skeleton.fingers[c]] for c in skeleton.bones[:, 1]])
     colours = np.broadcast_to(bone_colours, drawn.shape)[drawn]
+    truths = (None if truth is None else
+              aligned_truth(np.asarray(truth, np.float64)[frames], poses, skeleton.root))
+    marked = (np.zeros(poses.shape[:2], bool) if filled is None
+              else np.asarray(filled, bool)[frames])                       # (k, J)
 
     figure, rows = _sheet(len(frames))
     for ax, (label, axis, view) in zip(rows, VIEWS, strict=True):
         across = poses[..., axis] - (centre[axis] - half) + panel_left[:, None]  # (k, J)
         down = poses[..., 1]
+        if truths is not None:
+            t_across = truths[..., axis] - (centre[axis] - half) + panel_left[:, None]
+            t_segments = np.stack([t_across[:, skeleton.bones], truths[..., 1][:, skeleton.bones]],
+                                  axis=-1)                                # (k, B, 2, 2)
+            shown = np.isfinite(t_segments).all(axis=(-2, -1))
+            ax.add_collection(LineCollection(t_segments[shown], colors=TRUTH_COLOUR,
+                                             linewidths=2, zorder=1))
         segments = np.stack([across[:, skeleton.bones], down[:, skeleton.bones]], axis=-1)
-        ax.add_collection(LineCollection(segments[drawn], colors=colours, linewidths=2))
-        ax.plot(across.ravel(), down.ravel(), ".", color="black", ms=4)
+        ax.add_collection(LineCollection(segments[drawn], colors=colours, linewidths=2,
+                                         zorder=2))
+        ax.plot(across[~marked], down[~marked], ".", color="black", ms=4, zorder=3)
+        ax.plot(across[marked], down[marked], "o", mfc="none", mec=FILLED_COLOUR, mew=1.2,
+                ms=5, zorder=3)
         ax.add_collection(PatchCollection(
             [Rectangle((left, centre[1] - half), side, side) for left in panel_left],
             facecolor="none", edgecolor="black", linewidth=0.8, clip_on=False))
@@ -139,7 +164,12 @@ def write_preview_png(
         rows[0].text(left + half, 1.02, f"frame {frame}{when}", fontsize=8, ha="center",
                      va="bottom", transform=rows[0].get_xaxis_transform())
     handles = [Line2D([], [], color=FINGER_COLOURS[f], lw=2, label=f) for f in FINGERS]
-    figure.legend(handles=handles, loc="lower center", ncols=len(FINGERS), fontsize=7,
+    if marked.any():
+        handles.append(Line2D([], [], ls="none", marker="o", mfc="none", mec=FILLED_COLOUR,
+                              label="filled"))
+    if truths is not None:
+        handles.append(Line2D([], [], color=TRUTH_COLOUR, lw=2, label="truth"))
+    figure.legend(handles=handles, loc="lower center", ncols=len(handles), fontsize=7,
                   frameon=False, borderaxespad=0.2)
     if title:
         figure.suptitle(title, fontsize=10)

@@ -25,6 +25,14 @@ FINGER_RGB: dict[str, tuple[int, int, int]] = {
     "ring": (0x1F, 0x77, 0xB4), "little": (0x94, 0x67, 0xBD), "palm": (89, 89, 89),
 }
 
+#: Joints that were missing and gap-filled: drawn in this colour, a size larger, so the
+#: eye finds them (no finger uses magenta).
+FILLED_COLOUR = "#ff00ff"
+FILLED_RGB: tuple[int, int, int] = (0xFF, 0x00, 0xFF)
+#: The ground truth's bones, drawn faintly under the clip's own.
+TRUTH_COLOUR = "0.8"
+TRUTH_RGB: tuple[int, int, int] = (204, 204, 204)
+
 #: Half the side of a panel, as a fraction of the largest extent of the clip's joints.
 HALF_SPAN = 0.55
 
@@ -47,3 +55,13 @@ def view_box(xyz: np.ndarray) -> tuple[np.ndarray, float]:
     if not np.isfinite(low).all():
         return np.zeros(3), HALF_SPAN
     return (low + high) / 2, HALF_SPAN * max(float((high - low).max()), 1e-9)
+
+
+def aligned_truth(truth: np.ndarray, xyz: np.ndarray, root: int) -> np.ndarray:
+    """Move each frame of ``truth`` so its root lies on the root of ``xyz``, ``(T, J, 3)``.
+
+    Lifting recovers a hand up to its root's position (orthographic clips put the root at
+    depth 0), so the truth is compared root to root, as ``validation_joint`` does. Frames
+    where either root is NaN stay NaN.
+    """
+    return truth - truth[:, root:root + 1] + xyz[:, root:root + 1]

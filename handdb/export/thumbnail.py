@@ -2,7 +2,8 @@
 
 Same panels as :func:`handdb.export.preview.write_preview_png` (the layout of
 :mod:`handdb.export.sheet`: one column per frame, the camera's view above a side view,
-bones coloured by finger, joints black, missing joints leave gaps), but no title, ticks,
+bones coloured by finger, joints black, filled joints magenta, the truth's bones faint
+grey beneath, missing joints leave gaps), but no title, ticks,
 labels or legend: the pixels are set in a numpy array and saved with Pillow. That costs
 a few milliseconds where matplotlib's text and tick machinery costs a fifth of a second,
 which is why the build writes this one for every clip.
@@ -15,7 +16,16 @@ from pathlib import Path
 import numpy as np
 from PIL import Image
 
-from handdb.export.sheet import DEFAULT_PREVIEW_FRAMES, FINGER_RGB, VIEWS, preview_frames, view_box
+from handdb.export.sheet import (
+    DEFAULT_PREVIEW_FRAMES,
+    FILLED_RGB,
+    FINGER_RGB,
+    TRUTH_RGB,
+    VIEWS,
+    aligned_truth,
+    preview_frames,
+    view_box,
+)
 from handdb.hand.skeletons import Skeleton
 
 #: Side of a square panel, and the gap between panels and around the sheet, pixels.
@@ -24,6 +34,8 @@ GAP_PIXELS = 6
 #: Bone and joint thickness, pixels.
 BONE_PIXELS = 2
 JOINT_PIXELS = 3
+#: Side of a filled joint's square, pixels: larger than an observed joint's.
+FILLED_PIXELS = 5
 _BACKGROUND = 255
 _BORDER = (160, 160, 160)
 _JOINT = (0, 0, 0)
@@ -56,8 +68,26 @@ def _segment_points(starts: np.ndarray, ends: np.ndarray) -> tuple[np.ndarray, n
     return starts[segment] + fraction[:, None] * (ends - starts)[segment], segment
 
 
+def _paint_bones(image: np.ndarray, pixels: np.ndarray, bones: np.ndarray,
+                 bone_rgb: np.ndarray) -> None:
+    """Paint the bones ``(B, 2)`` of poses at ``pixels`` ``(k, J, 2)``, ``bone_rgb`` ``(B, 3)``."""
+    ends = pixels[:, bones]                                                 # (k, B, 2, 2)
+    drawn = np.isfinite(ends).all(axis=(-2, -1))                            # (k, B)
+    points, segment = _segment_points(ends[drawn][:, 0], ends[drawn][:, 1])
+    colours = np.broadcast_to(bone_rgb, (*drawn.shape, 3))[drawn]
+    _paint(image, points, colours[segment], BONE_PIXELS)
+
+
+def _paint_joints(image: np.ndarray, joints: np.ndarray, rgb: tuple[int, int, int],
+                  size: int) -> None:
+    """Paint squares of ``rgb`` at the finite rows of ``joints`` ``(n, 2)``."""
+    placed = joints[np.isfinite(joints).all(axis=1)]
+    _paint(image, placed, np.broadcast_to(np.array(rgb, np.uint8), (len(placed), 3)), size)
+
+
 def thumbnail_image(
-    skeleton: Skeleton, xyz: np.ndarray, count: int = DEFAULT_PREVIEW_FRAMES,
+    skeleton: Skeleton, xyz: np.ndarray, count: int = DEFAULT_PREVIEW_FRAMES, *,
+    filled: np.ndarray | None = None, truth: np.ndarray | None = None,
 ) -> np.ndarray:
     """Draw the contact sheet of ``count`` frames of ``xyz`` as an RGB image.
 
@@ -70,6 +100,12 @@ def thumbnail_image(
         where a joint has no position. ``T > 0``.
     count
         Frames to show.
+    filled
+        ``(T, J) bool``: the joints that were missing and gap-filled, drawn in
+        :data:`~handdb.export.sheet.FILLED_RGB`; ``None``: none.
+    truth
+        Ground truth ``(T, J, 3) float64``, clip units, or ``None``; its bones are drawn
+        faintly beneath, root on the clip's root (:func:`~handdb.export.sheet.aligned_truth`).
 
     Returns
     -------
@@ -84,33 +120,40 @@ def thumbnail_image(
     image = np.full((GAP_PIXELS + len(VIEWS) * pitch, GAP_PIXELS + len(frames) * pitch, 3),
                     _BACKGROUND, dtype=np.uint8)
     poses = xyz[frames]                                                     # (k, J, 3)
+    truths = (None if truth is None else
+              aligned_truth(np.asarray(truth, np.float64)[frames], poses, skeleton.root))
+    marked = (np.zeros(poses.shape[:2], bool) if filled is None
+              else np.asarray(filled, bool)[frames])                        # (k, J)
     to_pixels = PANEL_PIXELS / (2 * half)
     left = GAP_PIXELS + pitch * np.arange(len(frames))                      # (k,)
     bone_rgb = np.array([FINGER_RGB[skeleton.fingers[child]] for child in skeleton.bones[:, 1]],
                         dtype=np.uint8)                                     # (B, 3)
+    truth_rgb = np.broadcast_to(np.array(TRUTH_RGB, np.uint8), bone_rgb.shape)
+
+    def to_panel(points: np.ndarray, axis: int, top: int) -> np.ndarray:
+        """Pixel ``(column, row)`` of ``points`` ``(k, J, 3)`` in the row at ``top``."""
+        across = (points[..., axis] - (centre[axis] - half)) * to_pixels + left[:, None]
+        down = (points[..., 1] - (centre[1] - half)) * to_pixels + top
+        return np.stack([across, down], axis=-1)                            # (k, J, 2)
+
     for row, (_, axis, _) in enumerate(VIEWS):
         top = GAP_PIXELS + row * pitch
         for x in left:
             image[top - 1:top + PANEL_PIXELS + 1, [x - 1, x + PANEL_PIXELS]] = _BORDER
             image[[top - 1, top + PANEL_PIXELS], x - 1:x + PANEL_PIXELS + 1] = _BORDER
-        across = (poses[..., axis] - (centre[axis] - half)) * to_pixels + left[:, None]
-        down = (poses[..., 1] - (centre[1] - half)) * to_pixels + top       # (k, J)
-        pixels = np.stack([across, down], axis=-1)                          # (k, J, 2)
-        ends = pixels[:, skeleton.bones]                                    # (k, B, 2, 2)
-        drawn = np.isfinite(ends).all(axis=(-2, -1))                        # (k, B)
-        points, segment = _segment_points(ends[drawn][:, 0], ends[drawn][:, 1])
-        colours = np.broadcast_to(bone_rgb, (*drawn.shape, 3))[drawn]
-        _paint(image, points, colours[segment], BONE_PIXELS)
-        joints = pixels.reshape(-1, 2)
-        placed = np.isfinite(joints).all(axis=1)
-        _paint(image, joints[placed], np.broadcast_to(np.array(_JOINT, np.uint8),
-                                                      (int(placed.sum()), 3)), JOINT_PIXELS)
+        if truths is not None:
+            _paint_bones(image, to_panel(truths, axis, top), skeleton.bones, truth_rgb)
+        pixels = to_panel(poses, axis, top)
+        _paint_bones(image, pixels, skeleton.bones, bone_rgb)
+        _paint_joints(image, pixels[~marked], _JOINT, JOINT_PIXELS)
+        _paint_joints(image, pixels[marked], FILLED_RGB, FILLED_PIXELS)
     return image
 
 
 def write_thumbnail_png(
     path: str | Path, *, skeleton: Skeleton, xyz: np.ndarray,
-    count: int = DEFAULT_PREVIEW_FRAMES,
+    count: int = DEFAULT_PREVIEW_FRAMES, filled: np.ndarray | None = None,
+    truth: np.ndarray | None = None,
 ) -> Path:
     """Draw :func:`thumbnail_image` of ``xyz`` and save it as PNG at ``path``.
 
@@ -118,7 +161,7 @@ def write_thumbnail_png(
     ----------
     path
         Output ``.png`` file; its folder must exist.
-    skeleton, xyz, count
+    skeleton, xyz, count, filled, truth
         As for :func:`thumbnail_image`.
 
     Returns
@@ -127,5 +170,6 @@ def write_thumbnail_png(
         ``path``.
     """
     path = Path(path)
-    Image.fromarray(thumbnail_image(skeleton, xyz, count)).save(path, format="PNG")
+    image = thumbnail_image(skeleton, xyz, count, filled=filled, truth=truth)
+    Image.fromarray(image).save(path, format="PNG")
     return path

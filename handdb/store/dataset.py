@@ -4,7 +4,7 @@
 dimensions ``time``, ``keypoints`` and ``space`` (``x, y, z``), the layout of the
 ``movement`` package's pose datasets for one individual, so that its kinematics and
 plots work on handdb's clips. :func:`points_frame` gives the same values as a pandas
-frame, one row per frame and joint.
+frame, one row per frame and joint; :func:`load_truth` the clip's ground truth as an array.
 """
 
 from __future__ import annotations
@@ -106,6 +106,34 @@ def load_clip(db: str | Store, clip_id: str) -> xr.Dataset:
                 "space": ["x", "y", "z"]},
         attrs=attrs,
     )
+
+
+def load_truth(db: str | Store, clip_id: str, shape: tuple[int, int]) -> np.ndarray | None:
+    """The stored ground truth of ``clip_id``, ``(T, J, 3) float64``, or ``None`` if none.
+
+    Parameters
+    ----------
+    db
+        Database folder or fsspec URL, or a :class:`~handdb.store.database.Store`.
+    clip_id
+        A clip of ``clips``.
+    shape
+        ``(T, J)``: the clip's frames and joints (:func:`load_clip`'s ``time`` and
+        ``keypoints``). Positions are in the clip's units, camera frame; NaN where
+        ``truth_3d`` has no row.
+    """
+    from handdb.store.query import connect
+
+    store = db if isinstance(db, Store) else Store(str(db))
+    with connect(store, read_only=True) as con:
+        rows = con.sql("SELECT frame, joint_index, x, y, z FROM truth_3d WHERE clip_id = ?",
+                       params=[clip_id]).fetchnumpy()
+    if len(rows["frame"]) == 0:
+        return None
+    truth = np.full((*shape, 3), np.nan)
+    truth[np.asarray(rows["frame"]), np.asarray(rows["joint_index"])] = np.stack(
+        [np.asarray(rows[c], np.float64) for c in ("x", "y", "z")], axis=-1)
+    return truth
 
 
 def points_frame(dataset: xr.Dataset) -> pd.DataFrame:

@@ -24,3 +24,31 @@ def test_contact_sheet_draws_the_hand(tmp_path):
     assert 0.02 < inked < 0.5
     red = (image[..., 0] > 0.7) & (image[..., 1] < 0.3) & (image[..., 2] < 0.3)
     assert red.sum() > 100
+
+
+def _magenta(image):
+    return int(((image[..., 0] > 0.8) & (image[..., 1] < 0.35) & (image[..., 2] > 0.8)).sum())
+
+
+def _truth_grey(image):
+    rgb = image[..., :3]
+    return int((np.abs(rgb - 0.8) < 0.03).all(axis=-1).sum())
+
+
+def test_contact_sheet_marks_filled_joints_and_overlays_truth(tmp_path):
+    motion = make_hinge_motion(load_skeleton("mediapipe21"), n_frames=50)
+    skeleton, xyz = motion.skeleton, motion.xyz
+    filled = np.zeros(xyz.shape[:2], bool)
+    filled[:, skeleton.index("index_tip")] = True
+    root = xyz[:, skeleton.root:skeleton.root + 1]
+    truth = (xyz - root) * 1.15 + root + np.array([0.0, 0.0, 300.0])
+
+    def sheet(name, **extra):
+        return imread(write_preview_png(tmp_path / name, skeleton=skeleton, xyz=xyz,
+                                        units="mm", count=4, **extra))
+
+    plain, marked = sheet("plain.png"), sheet("marked.png", filled=filled, truth=truth)
+    assert _magenta(plain) == 0
+    assert _magenta(marked) > 8 * 10          # a ring at each of 8 panels, and the legend
+    assert _truth_grey(marked) > 3 * _truth_grey(plain) > 0  # antialiasing greys a few
+    assert _magenta(sheet("none.png", filled=np.zeros_like(filled))) == 0
