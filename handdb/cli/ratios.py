@@ -72,7 +72,9 @@ def show(db: str = DbOption, cohort: str = CohortOption) -> None:
     rows = ratios.filter(pc.equal(ratios.column("cohort"), cohort))
     grid = Table("finger", "segment", "n", "mean", "min", "max", "range", "std", "95% CI",
                  title=f"joint ratios, cohort {cohort}")
-    for r in rows.to_pylist():
+    # fingers from the thumb to the little finger, not as stored (alphabetically)
+    for r in sorted(rows.to_pylist(), key=lambda r: (list(SEGMENTS).index(r["finger"]),
+                                                     r["segment"])):
         interval = "" if r["ci_low"] is None else f"{r['ci_low']:.4f}-{r['ci_high']:.4f}"
         std = "" if r["std"] is None else f"{r['std']:.4f}"
         grid.add_row(r["finger"], r["segment"], str(r["n"]),

@@ -44,3 +44,6 @@ def test_show_states_the_discrepancies(tmp_path):
     assert result.exit_code == 0, result.output
     assert "0.4946" in result.output and "0.4846" in result.output
     assert "169.97" in result.output and "169.67" in result.output
+    cells = [line.replace("│", " ").split() for line in result.output.splitlines()]
+    listed = [row[0] for row in cells if len(row) > 1 and row[1] == "J1"]
+    assert listed == ["thumb", "index", "middle", "ring", "little"]
