@@ -135,17 +135,8 @@ DEMO_DB_CLIPS = ("rapid-s01", "wave-s02")
 @pytest.fixture(scope="session")
 def demo_db(tmp_path_factory):
     """A database holding two demo clips, built in this process (no orchestrator)."""
-    from handdb.build import BuildOptions, build_in_process
-    from handdb.demo import write_demo_inbox
+    from handdb.build import BuildOptions
+    from tests.support.building import build_demo_clips
 
-    root = tmp_path_factory.mktemp("gapfill-db")
-    demo, inbox = root / "demo", root / "inbox"
-    write_demo_inbox(demo)
-    inbox.mkdir()
-    for clip_id in DEMO_DB_CLIPS:
-        for path in demo.glob(f"{clip_id}.*"):
-            path.rename(inbox / path.name)
-    db = str(root / "db")
-    summary = build_in_process(inbox, db, BuildOptions(export_usd=False))
-    assert sorted(summary.processed) == sorted(DEMO_DB_CLIPS)
-    return db
+    return build_demo_clips(tmp_path_factory.mktemp("gapfill-db"), DEMO_DB_CLIPS,
+                            BuildOptions(export_usd=False))

@@ -15,3 +15,26 @@ def run(inbox: str | Path, db: str, *, runner: str = "thread", workers: int = 2,
         options["compare"] = tuple(options["compare"])
     return run_build(str(inbox), db, BuildOptions(**options), runner=runner, workers=workers,
                      address=address)
+
+
+def build_demo_clips(root: Path, clip_ids: tuple[str, ...], options: BuildOptions
+                     ) -> str:
+    """Build a database of some of the demo's clips in this process, under ``root``.
+
+    The demo inbox is written to ``root / "demo"``, the clips' files moved to
+    ``root / "inbox"``, and the database built at ``root / "db"`` (returned) by
+    :func:`handdb.build.build_in_process`; every clip must be processed.
+    """
+    from handdb.build import build_in_process
+    from handdb.demo import write_demo_inbox
+
+    demo, inbox = root / "demo", root / "inbox"
+    write_demo_inbox(demo)
+    inbox.mkdir()
+    for clip_id in clip_ids:
+        for path in demo.glob(f"{clip_id}.*"):
+            path.rename(inbox / path.name)
+    db = str(root / "db")
+    summary = build_in_process(inbox, db, options)
+    assert sorted(summary.processed) == sorted(clip_ids)
+    return db

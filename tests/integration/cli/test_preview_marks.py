@@ -1,16 +1,18 @@
 """The build's thumbnail and ``handdb preview`` mark filled joints and show the truth."""
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 from matplotlib.image import imread
 from PIL import Image
 from typer.testing import CliRunner
 
-from handdb.build import BuildOptions, build_in_process
+from handdb.build import BuildOptions
 from handdb.cli import app
-from handdb.demo import write_demo_inbox
 from handdb.export.sheet import FILLED_RGB, TRUTH_RGB, preview_frames
 from handdb.store.dataset import load_clip
+from tests.support.building import build_demo_clips
 
 #: A demo clip with occlusions filled, and one fully observed; both have ground truth.
 GAPPY, COMPLETE = "rapid-occluded-s03", "rapid-s01"
@@ -18,17 +20,8 @@ GAPPY, COMPLETE = "rapid-occluded-s03", "rapid-s01"
 
 @pytest.fixture(scope="module")
 def db(tmp_path_factory):
-    root = tmp_path_factory.mktemp("marks")
-    demo, inbox = root / "demo", root / "inbox"
-    write_demo_inbox(demo)
-    inbox.mkdir()
-    for clip_id in (GAPPY, COMPLETE):
-        for path in demo.glob(f"{clip_id}.*"):
-            path.rename(inbox / path.name)
-    db = root / "db"
-    summary = build_in_process(inbox, str(db), BuildOptions())
-    assert sorted(summary.processed) == sorted([GAPPY, COMPLETE])
-    return db
+    return Path(build_demo_clips(tmp_path_factory.mktemp("marks"), (GAPPY, COMPLETE),
+                                 BuildOptions()))
 
 
 def _filled_in_sheet(db, clip_id):

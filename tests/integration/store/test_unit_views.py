@@ -3,9 +3,9 @@
 import numpy as np
 import pytest
 
-from handdb.build import BuildOptions, build_in_process
-from handdb.demo import write_demo_inbox
+from handdb.build import BuildOptions
 from handdb.store.query import connect, derived_views
+from tests.support.building import build_demo_clips
 
 #: The thesis's Maya clip (centimetres) and a synthetic demo clip (millimetres).
 CLIPS = ("thesis-clench", "rapid-s01")
@@ -13,17 +13,8 @@ CLIPS = ("thesis-clench", "rapid-s01")
 
 @pytest.fixture(scope="module")
 def db(tmp_path_factory):
-    root = tmp_path_factory.mktemp("units")
-    demo, inbox = root / "demo", root / "inbox"
-    write_demo_inbox(demo)
-    inbox.mkdir()
-    for clip_id in CLIPS:
-        for path in demo.glob(f"{clip_id}.*"):
-            path.rename(inbox / path.name)
-    db = str(root / "db")
-    summary = build_in_process(inbox, db, BuildOptions(export_usd=False))
-    assert sorted(summary.processed) == sorted(CLIPS)
-    return db
+    return build_demo_clips(tmp_path_factory.mktemp("units"), CLIPS,
+                            BuildOptions(export_usd=False))
 
 
 def test_the_clips_are_stored_in_different_units(db):
