@@ -20,6 +20,7 @@ from handdb.errors import ParameterError, StoreError
 from handdb.export import placement
 from handdb.export.formats import FORMATS, ExportFormat, ExportOptions, format_for_suffix
 from handdb.hand.skeletons import Skeleton, bone_length_array, load_skeleton
+from handdb.store import tables
 from handdb.store.database import Store
 
 
@@ -73,13 +74,11 @@ def read_stored_motion(db: str, clip_id: str) -> StoredMotion:
     """
     store = Store(db)
     clip = _read(store, "clips", clip_id).to_pylist()[0]
-    joints = _read(store, "joints_3d", clip_id).select(
-        ["frame", "joint_index", "x", "y", "z"]).to_pydict()
+    joints = _read(store, "joints_3d", clip_id)
     bones = _read(store, "bone_lengths", clip_id).select(["bone", "length"]).to_pydict()
     skeleton = load_skeleton(clip["skeleton"])
-    xyz = np.full((clip["n_frames"], skeleton.n_joints, 3), np.nan)
-    positions = np.column_stack([joints[axis] for axis in "xyz"]).astype(np.float64)
-    xyz[joints["frame"], joints["joint_index"]] = positions
+    xyz = tables.per_point(joints, ("x", "y", "z"), (clip["n_frames"], skeleton.n_joints)
+                           ).astype(np.float64, copy=False)
     lengths = bone_length_array(skeleton, dict(zip(bones["bone"], bones["length"], strict=True)),
                                 complete=True)
     return StoredMotion(clip_id=clip_id, skeleton=skeleton, hand=clip["hand"],

@@ -15,6 +15,7 @@ import numpy as np
 
 from handdb.errors import UnknownNameError
 from handdb.hand.skeletons import load_skeleton
+from handdb.store import tables
 from handdb.store.database import Store
 
 if TYPE_CHECKING:
@@ -80,26 +81,18 @@ def load_clip(db: str | Store, clip_id: str) -> xr.Dataset:
     clip = clips.to_pylist()[0]
     joints = load_skeleton(clip["skeleton"]).joints
     shape = (clip["n_frames"], len(joints))
-    frame = rows.column("frame").to_numpy()
-    joint = rows.column("joint_index").to_numpy()
-
-    def dense(columns: tuple[str, ...], missing: float | bool) -> np.ndarray:
-        values = np.stack([rows.column(c).to_numpy(zero_copy_only=False) for c in columns],
-                          axis=-1)
-        out = np.full((*shape, len(columns)), missing, dtype=values.dtype)
-        out[frame, joint] = values
-        return out
-
-    per_point = {name: (("time", "keypoints"), dense((name,), missing)[..., 0])
-                 for name, missing in POINT_VARIABLES.items()}
+    point_variables = {
+        name: (("time", "keypoints"), tables.per_point(rows, (name,), shape, missing)[..., 0])
+        for name, missing in POINT_VARIABLES.items()}
     attrs = {key: clip[key] for key in CLIP_ATTRIBUTES if clip[key] is not None}
     attrs |= {"flag_reasons": list(clip["flag_reasons"]), "source": "handdb"}
     frames = np.arange(shape[0])
     return xr.Dataset(
         data_vars={
-            "position": (("time", "keypoints", "space"), dense(("x", "y", "z"), np.nan),
+            "position": (("time", "keypoints", "space"),
+                         tables.per_point(rows, ("x", "y", "z"), shape),
                          {"units": clip["units"], "frame": "camera: x right, y down, z away"}),
-            **per_point,
+            **point_variables,
         },
         coords={"time": ("time", frames / clip["fps"], {"units": "s"}),
                 "frame": ("time", frames), "keypoints": list(joints),
@@ -127,13 +120,10 @@ def load_truth(db: str | Store, clip_id: str, shape: tuple[int, int]) -> np.ndar
     store = db if isinstance(db, Store) else Store(str(db))
     with connect(store, read_only=True) as con:
         rows = con.sql("SELECT frame, joint_index, x, y, z FROM truth_3d WHERE clip_id = ?",
-                       params=[clip_id]).fetchnumpy()
-    if len(rows["frame"]) == 0:
+                       params=[clip_id]).to_arrow_table()
+    if rows.num_rows == 0:
         return None
-    truth = np.full((*shape, 3), np.nan)
-    truth[np.asarray(rows["frame"]), np.asarray(rows["joint_index"])] = np.stack(
-        [np.asarray(rows[c], np.float64) for c in ("x", "y", "z")], axis=-1)
-    return truth
+    return tables.per_point(rows, ("x", "y", "z"), shape).astype(np.float64, copy=False)
 
 
 def points_frame(dataset: xr.Dataset) -> pd.DataFrame:

@@ -176,6 +176,33 @@ def labels(names: Sequence[str] | np.ndarray, codes: np.ndarray,
     return pa.array(list(names), pa.string()).take(indices)
 
 
+def per_point(rows: pa.Table, columns: Sequence[str], shape: tuple[int, int],
+              missing: float | bool = np.nan) -> np.ndarray:
+    """Rows of a per-point table (``frame``, ``joint_index``) as a dense array.
+
+    Parameters
+    ----------
+    rows
+        Rows of ``joints_3d``, ``truth_3d``, ``tracks_2d`` or ``markers_3d`` of one clip.
+    columns
+        The ``C`` columns to gather, e.g. ``("x", "y", "z")``.
+    shape
+        ``(T, J)``: the clip's frames and its skeleton's joints.
+    missing
+        Value where the table has no row.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(T, J, C)``, of the columns' common dtype.
+    """
+    values = np.stack([rows.column(c).to_numpy(zero_copy_only=False) for c in columns],
+                      axis=-1)
+    out = np.full((*shape, len(columns)), missing, dtype=values.dtype)
+    out[rows.column("frame").to_numpy(), rows.column("joint_index").to_numpy()] = values
+    return out
+
+
 def _column(value: Any, n: int) -> pa.Array:
     """Return ``value`` as an Arrow array; a scalar is repeated ``n`` times."""
     if isinstance(value, pa.ChunkedArray):
