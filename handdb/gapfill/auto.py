@@ -1,7 +1,7 @@
 """``auto``, the default: per gap, the method that suits it, in the palm frame, then refined.
 
 0. Detector jitter is measured and, where a smoothing window lowers Stein's risk, the
-   observed tracks are smoothed (:mod:`handdb.gapfill.denoise`); everything below reads
+   observed tracks are smoothed (:mod:`handdb.denoise`); everything below reads
    the smoothed tracks, and the observed points are returned as they were.
 1. The palm's affine motion is fitted frame by frame and every track is expressed in the
    palm frame (:mod:`handdb.gapfill.palm_frame`), where only finger bending is left to
@@ -41,8 +41,8 @@ from collections.abc import Sequence
 import numpy as np
 
 from handdb.compiled import kernel
+from handdb.denoise import denoise
 from handdb.errors import GapFillError, ParameterError
-from handdb.gapfill.denoise import denoise
 from handdb.gapfill.gaps import Gaps, find_gaps, mask_points
 from handdb.gapfill.interpolate import interpolate_gaps
 from handdb.gapfill.lowrank import DEFAULT_VARIANCE, blend_to_edges, lowrank_reconstruct
@@ -372,7 +372,7 @@ def fill_auto(
         (pixels per unit, scalar or ``(T,)``) that bound the projected bones in refinement.
     smooth
         Fill from the observed tracks smoothed against detector jitter
-        (:func:`~handdb.gapfill.denoise.denoise`; the observed points are returned as they
+        (:func:`~handdb.denoise.denoise`; the observed points are returned as they
         were), or from the tracks as observed.
 
     Raises

@@ -3,7 +3,7 @@
 A detector's points jitter, and the depth of a bone lying nearly in the image plane is the
 square root of a small difference of its length and its image, so a pixel of jitter turns
 into millimetres of depth and flips signs. The tracks are therefore first smoothed in time
-where they jitter (:func:`handdb.gapfill.denoise.denoise`: a Savitzky-Golay window chosen
+where they jitter (:func:`handdb.denoise.denoise`: a Savitzky-Golay window chosen
 by Stein's risk on the clip's own measured noise, none on clean tracks or lone images), and
 the result's ``x, y`` follow the smoothed points.
 
@@ -52,7 +52,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from handdb.clip import Camera
-from handdb.gapfill.denoise import denoise
+from handdb.denoise import denoise
 from handdb.hand.layout import HandLayout
 from handdb.hand.skeletons import Skeleton
 from handdb.lifting.finger_geometry import FingerCandidates, perspective_candidates

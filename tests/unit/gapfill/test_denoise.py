@@ -3,8 +3,8 @@
 import numpy as np
 import pytest
 
+from handdb.denoise import denoise, noise_level
 from handdb.gapfill import fill_gaps
-from handdb.gapfill.denoise import denoise, noise_level
 from handdb.gapfill.masks import random_gaps_mask
 
 NOISE_PX = 3.0

@@ -1,10 +1,11 @@
-"""Detector noise: how much a clip's tracks jitter, and tracks smoothed to fill gaps from.
+"""Detector noise: how much a clip's tracks jitter, and the tracks smoothed in time.
 
-A detector's points jitter by a pixel or a few from frame to frame. Every estimate of a
-missing point starts from observed ones (the frames bounding a gap, the bones that carry
-a finger), so the jitter of those few points goes straight into the fill. The fill is
-therefore computed from smoothed tracks; the observed points themselves are returned as
-they were.
+A detector's points jitter by a pixel or a few from frame to frame. Gap filling estimates
+a missing point from observed ones (the frames bounding a gap, the bones that carry a
+finger), and lifting takes a bone's depth from the small difference of its length and its
+image, so the jitter of a few points goes straight into both. Both stages therefore work
+from smoothed tracks (:mod:`handdb.gapfill.auto`, :mod:`handdb.lifting.kinematic`); the
+stored observations stay as they were.
 
 :func:`noise_level` measures the jitter from the clip itself: the fourth difference of a
 track, ``x[t-2] - 4 x[t-1] + 6 x[t] - 4 x[t+1] + x[t+2]``, is nearly blind to motion (it
