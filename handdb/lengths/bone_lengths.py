@@ -37,13 +37,14 @@ import pyarrow as pa
 from handdb.clip import Clip
 from handdb.hand.skeletons import Skeleton, frame_bone_lengths
 from handdb.lengths.estimate import (
-    Estimate,
     combine,
     hand_length_from,
     image_proportions,
+    palm_bones,
     population_hand_length,
     proportion_lengths,
     ratio_lengths,
+    sized_by_kind,
     sized_like,
 )
 from handdb.lengths.ratios import bone_ratios, joint_ratios, table1_measurements
@@ -171,7 +172,7 @@ def clip_bone_lengths(clip: Clip, ratios: pa.Table | None = None) -> BoneLengths
     uv = np.where(clip.observed[..., None], clip.uv, np.nan)
     shape = image_proportions(uv, skeleton, proportions.lengths)
     if np.isfinite(lengths).any():
-        images = sized_like(shape, Estimate(lengths, np.zeros(n), truth_frames))
+        images = sized_by_kind(shape, lengths, palm_bones(skeleton))
     else:
         images = sized_like(shape, proportion_lengths(skeleton, hand_length), hand_spread)
     mean_ratio, _ = bone_ratios(skeleton, ratios)

@@ -10,7 +10,16 @@ import pytest
 from handdb.hand.anatomy import hand_length_proportions
 from handdb.hand.skeletons import load_skeleton
 from handdb.lengths.bone_lengths import SOURCES, bone_lengths_table, clip_bone_lengths
-from handdb.lengths.estimate import ratio_lengths, reference_frame_lengths
+from handdb.lengths.estimate import (
+    Estimate,
+    hand_proportions,
+    image_proportions,
+    palm_bones,
+    ratio_lengths,
+    reference_frame_lengths,
+    sized_by_kind,
+    sized_like,
+)
 from handdb.lengths.ratios import bone_ratios, joint_ratios, table1_measurements
 from handdb.store.tables import empty, schema
 from handdb.synthetic import synthesize_clip
@@ -61,6 +70,60 @@ def test_the_whole_clip_beats_one_frame_assumed_flat():
         errors["clip"].append(np.abs(lengths - truth)[unknown])
         errors["reference frame"].append(np.abs(reference - truth)[unknown])
     assert np.mean(errors["clip"]) < np.nanmean(errors["reference frame"])
+
+
+def population_clip(seed, motion, hand_length_mm=None):
+    """A hand of the population before a pinhole camera, with a tracker's pixel noise, its
+    clip without truth or lengths and its true bone lengths ``(J,)``, mm."""
+    synthetic = synthesize_clip(motion, 300, seed=seed, camera="pinhole", noise_px=1.0,
+                                hand_length_mm=hand_length_mm)
+    clip = synthetic.as_clip("s")
+    clip = replace(clip, truth=None, spec=replace(clip.spec, bone_lengths={}))
+    truth = np.array([synthetic.bone_lengths.get(j, np.nan) for j in clip.skeleton.joints])
+    return clip, truth
+
+
+@pytest.mark.parametrize("seed, motion, hand_length_mm",
+                         [(0, "random", 165.0), (1, "wave", 200.0), (4, "clench", 170.0)])
+def test_one_length_or_a_hand_length_gives_a_hand_of_the_right_size(seed, motion,
+                                                                    hand_length_mm):
+    clip, truth = population_clip(seed, motion, hand_length_mm)
+    bones = clip.skeleton.bones[:, 1]
+    one = {"middle_pip": float(truth[clip.skeleton.index("middle_pip")])}
+    for spec in (replace(clip.spec, bone_lengths=one),
+                 replace(clip.spec, hand_length=hand_length_mm)):
+        ratio = clip_bone_lengths(replace(clip, spec=spec)).lengths[bones] / truth[bones]
+        # the population's hands differ in length by 6 % (1 sd); these sizes do not
+        assert abs(np.median(ratio) - 1.0) < 0.07
+        assert np.std(np.log(ratio)) < 0.1
+
+
+def test_the_palm_is_sized_by_its_own_known_bones():
+    # the palm's bones from the wrist fall shorter of their image envelopes than the
+    # phalanges do: sized by the known middle metacarpal, not by one factor for all
+    five = ("middle_mcp", "middle_pip", "middle_dip", "middle_tip", "thumb_cmc")
+    errors = {"one factor": [], "by kind": []}
+    for seed, motion in [(1, "wave"), (2, "random"), (3, "wave")]:
+        clip, truth = population_clip(seed, motion)
+        skeleton = clip.skeleton
+        known = np.array([truth[j] if name in five else np.nan
+                          for j, name in enumerate(skeleton.joints)])
+        shape = image_proportions(clip.uv, skeleton, hand_proportions(skeleton))
+        palm = palm_bones(skeleton) & np.isnan(known)
+        one = sized_like(shape, Estimate(known, np.zeros_like(known), shape.n_frames))
+        errors["one factor"].append(np.abs(one.lengths - truth)[palm])
+        errors["by kind"].append(np.abs(sized_by_kind(shape, known, palm_bones(skeleton))
+                                        .lengths - truth)[palm])
+    assert np.mean(errors["by kind"]) < 0.5 * np.mean(errors["one factor"])
+
+
+def test_palm_bones_are_the_wrist_to_the_long_fingers_and_palm_centre():
+    for name, expected in [("mediapipe21", {"index_mcp", "middle_mcp", "ring_mcp",
+                                            "little_mcp"}),
+                           ("dhg22", {"palm", "index_mcp", "middle_mcp", "ring_mcp",
+                                      "little_mcp"})]:
+        skeleton = load_skeleton(name)
+        assert {skeleton.joints[j] for j in np.flatnonzero(palm_bones(skeleton))} == expected
 
 
 def test_a_clip_with_no_length_gets_an_average_hand_with_its_spread(make_clip, hand):
