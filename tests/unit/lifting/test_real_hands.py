@@ -115,6 +115,36 @@ def test_the_default_is_as_good_as_the_thesis_on_every_dhg_bone(dhg_errors, requ
     assert losing_bones(errors) == {}
 
 
+#: Noisy DHG: pixel noise and the seeds of its draws (those of
+#: ``benchmarks/real_captures.py``, which reports the same case pooled).
+DHG_NOISE_PX, DHG_NOISE_SEEDS = 3.0, (7, 8, 9, 10)
+
+
+def test_the_default_beats_the_thesis_on_depth_on_every_noisy_dhg_draw(dhg_mm, request):
+    """Each draw on its own: the default must not lose on a clip that a pooled figure hides."""
+    request.applymarker(pytest.mark.xfail(strict=True, reason=(
+        "on draw 7 the palm takes its other Necker pose in every frame (91.4 mm against the "
+        "thesis's 57.2): the clip's summed finger anatomy prefers it, the thumb's by 850 "
+        "nats; capping each finger's lead per frame fixes this draw but flips three clips "
+        "of DHG's random views at 2 px instead")))
+    skeleton = load_skeleton("dhg22")
+    lengths = real_data.median_bone_lengths(dhg_mm, skeleton)
+    clean, camera = dhg_view(dhg_mm, "orthographic")
+    losing = {}
+    for seed in DHG_NOISE_SEEDS:
+        rng = np.random.default_rng([seed, int(round(10 * DHG_NOISE_PX))])
+        uv = clean + rng.normal(scale=DHG_NOISE_PX, size=clean.shape)
+        dz = {}
+        for method in ("kinematic", "thesis"):
+            errors = real_data.Errors(skeleton)
+            errors.add(dhg_mm, lift(uv, skeleton, lengths, camera, method=method,
+                                    hand="right").xyz)
+            dz[method] = round(errors.summary()["all"]["dz"], 1)
+        if dz["kinematic"] > dz["thesis"]:
+            losing[seed] = dz
+    assert losing == {}
+
+
 def test_the_default_beats_the_thesis_on_depth_on_interhand(interhand_errors):
     _, errors = interhand_errors
     assert errors["kinematic"].summary()["all"]["dz"] < errors["thesis"].summary()["all"]["dz"]
