@@ -109,9 +109,25 @@ def resolve_names(names: Sequence[str], spec: ClipSpec, skeleton: Skeleton,
         line, field = locate(0)
         shown = ", ".join(quoted(n) for n in names[:8]) + (", ..." if len(names) > 8 else "")
         raise InputError(file, f"none of its names ({shown}) is a joint of skeleton "
-                         f"'{skeleton.name}' once the sidecar's joint_map is applied",
+                         f"'{skeleton.name}' once the sidecar's joint_map is applied; "
+                         + _joint_map_advice(names, skeleton),
                          line=line, field=field, clip_id=spec.clip_id)
     return indices
+
+
+def _joint_map_advice(names: Sequence[str], skeleton: Skeleton) -> str:
+    """How to map a file's names that are none of ``skeleton``'s joints.
+
+    Names that are a joint once a tool's prefix (``Subject:`` of Vicon) is cut and case is
+    ignored are offered as the example entries of the ``joint_map``.
+    """
+    matches = {name: bare for name in names
+               if (bare := name.rsplit(":", 1)[-1].strip().lower()) in skeleton.joints}
+    example = ", ".join(f'"{name}": "{joint}"' for name, joint in list(matches.items())[:3])
+    if not example:
+        example = f'"{names[0]}": "wrist"'
+    return (f"map them to its joints in the sidecar's joint_map, e.g. \"joint_map\": "
+            f"{{{example}, ...}}")
 
 
 def check_joint_map_keys(spec: ClipSpec, named: Mapping[str, Collection[str]]) -> None:

@@ -54,6 +54,19 @@ def test_c3d_whose_every_label_is_ignored_is_refused(tmp_path):
     assert caught.value.field == "POINT:LABELS"
 
 
+@pytest.mark.parametrize(("labels", "example"), [
+    (["RHand:RWRA", "RHand:index_tip", "RHand:Thumb_Tip"],
+     '"joint_map": {"RHand:index_tip": "index_tip", "RHand:Thumb_Tip": "thumb_tip", ...}'),
+    (["A", "B"], '"joint_map": {"A": "wrist", ...}'),
+])
+def test_labels_of_another_convention_are_refused_with_a_joint_map_to_write(tmp_path, labels,
+                                                                            example):
+    path = write_labelled(tmp_path / "m01.c3d", labels)
+    with pytest.raises(InputError) as caught:
+        c3d_reader.read(path, marker_spec(joint_map={"*": None}), SKELETON)
+    assert caught.value.reason.endswith(f"sidecar's joint_map, e.g. {example}")
+
+
 def test_two_labels_for_one_joint_are_refused(tmp_path):
     path = write_labelled(tmp_path / "m01.c3d", ["wrist", "WRIST2"])
     with pytest.raises(InputError, match="'wrist' and 'WRIST2' both map to joint 'wrist'"):
