@@ -280,8 +280,11 @@ def persistent_frames(frames: np.ndarray) -> np.ndarray:
     -------
     numpy.ndarray
         ``(T,) bool``: a running majority, the clip's ends mirrored: a lone frame drops
-        out, a run of two or more stays, and frames alternating in and out stay.
+        out, a run of two or more stays, and frames alternating in and out stay. A clip
+        of one frame is that frame.
     """
+    if len(frames) < 2:
+        return frames.copy()  # scipy mirrors a single frame from memory beyond it
     return median_filter(frames, size=PERSISTENCE_FRAMES, mode="mirror")
 
 
