@@ -337,10 +337,16 @@ def _dense(rows: Observations | Positions, values: np.ndarray, n_frames: int) ->
 
 def _check_plausible(spec: ClipSpec, observations: Observations | Positions,
                      truth: Positions | None, three_d: bool) -> None:
-    """Refuse coordinates no hand can have: beyond the limits of :mod:`handdb.ingest.limits`."""
+    """Refuse coordinates no hand can have.
+
+    Coordinates beyond the limits of :mod:`handdb.ingest.limits`, and a 2D track whose
+    every point lies within a pixel of the origin (normalised, not pixels).
+    """
     metres = MAX_COORDINATE_METRES / spec.meters_per_unit
     observations.check_magnitude(metres if three_d else MAX_PIXEL_COORDINATE,
                                  spec.units if three_d else "px")
+    if isinstance(observations, Observations):
+        observations.check_pixels()
     if truth is not None:
         truth.check_magnitude(metres, spec.units)
 

@@ -20,6 +20,7 @@ from handdb.errors import InputError
 from handdb.hand.skeletons import Skeleton
 from handdb.ingest.limits import (
     MAX_FRAMES,
+    NORMALISED_BOUND,
     frame_limit_reason,
     is_sparse,
     is_stray_run,
@@ -346,6 +347,28 @@ class Observations(_Rows):
 
     def _coordinates(self) -> dict[str, np.ndarray]:
         return {"u": self.u, "v": self.v}
+
+    def check_pixels(self) -> None:
+        """Refuse a track normalised to the image instead of in pixels.
+
+        Such a track's every point lies within :data:`NORMALISED_BOUND` pixels of the
+        origin: a hand is more than two pixels across.
+
+        Raises
+        ------
+        InputError
+            At the point farthest from the origin, saying how to give pixels.
+        """
+        uv = self.uv
+        seen = np.flatnonzero(np.isfinite(uv).all(axis=1))
+        if not seen.size or np.abs(uv[seen]).max() > NORMALISED_BOUND:
+            return
+        row = int(seen[np.argmax(np.abs(uv[seen]).max(axis=1))])
+        raise self.error(row, "u", f"every point lies within {NORMALISED_BOUND:g} px of the "
+                         "origin, so the coordinates are normalised to the image, not "
+                         "pixels: multiply them by the image's width and height (MediaPipe's "
+                         "landmarks: keep them in .mediapipe.csv or .mediapipe.json, which "
+                         'scale them by the sidecar\'s "image")')
 
 
 @dataclass(frozen=True, kw_only=True)

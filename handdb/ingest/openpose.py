@@ -37,7 +37,12 @@ from handdb.clip import ClipSpec
 from handdb.errors import InputError
 from handdb.hand.skeletons import Skeleton, correspondence, load_skeleton
 from handdb.ingest.jsondoc import load_json, number_array, preview
-from handdb.ingest.limits import MAX_FRAMES, folder_files, frame_limit_reason
+from handdb.ingest.limits import (
+    MAX_FRAMES,
+    NORMALISED_BOUND,
+    folder_files,
+    frame_limit_reason,
+)
 from handdb.ingest.observations import Observations, resolve_names
 from handdb.ingest.registry import InputFormat
 
@@ -52,8 +57,6 @@ HAND_KEYS = {"right": "hand_right_keypoints_2d", "left": "hand_left_keypoints_2d
 
 KEYPOINT_FILE = re.compile(r"(\d+)_keypoints\.json$")
 
-#: Keypoints all within this magnitude are normalised coordinates, not pixels.
-NORMALISED_BOUND = 1.0
 
 
 def frame_files(folder: Path) -> list[tuple[int, Path]]:

@@ -2,7 +2,8 @@ import numpy as np
 import pytest
 
 from handdb.errors import InputError
-from handdb.ingest import tracks_csv
+from handdb.ingest import discover, load_clip, tracks_csv
+from tests.unit.ingest.conftest import hand_track
 
 
 def read_text(tmp_path, spec_for, skeleton, text, **sidecar):
@@ -130,3 +131,19 @@ def test_other_separators_are_refused_with_what_to_save(tmp_path, spec_for, medi
                        "decimals") as info:
         read_text(tmp_path, spec_for, mediapipe21, text)
     assert (info.value.line, info.value.field) == (1, "frame")
+
+
+@pytest.mark.parametrize(("scale", "refused"), [(1.0, True), (640.0, False)])
+def test_a_track_normalised_to_the_image_is_refused_as_not_pixels(tmp_path, write_sidecar,
+                                                                  mediapipe21, scale, refused):
+    track = hand_track(mediapipe21, 4)
+    normalised = track / track.max()                                    # within [0, 1]
+    write_sidecar(tmp_path, "clip")
+    tracks_csv.write(tmp_path / "clip.tracks.csv", normalised * scale, None, mediapipe21)
+    (entry,) = discover(tmp_path).clips
+    if not refused:
+        np.testing.assert_allclose(load_clip(entry).uv, normalised * scale)
+        return
+    with pytest.raises(InputError, match="normalised to the image, not pixels") as info:
+        load_clip(entry)
+    assert info.value.field == "u" and info.value.line > 1
