@@ -212,7 +212,8 @@ def validate(result: ClipResult, options: BuildOptions) -> ClipResult:
     bones = _needs(result.bones, "bone lengths", result)
     residual = result.fit.residual if result.fit is not None else None
     verdict = assess(clip.skeleton, clip.spec.units, clip.spec.hand, bones.lengths,
-                     lifted.xyz, residual, labelled=clip.markers)
+                     lifted.xyz, residual, labelled=clip.markers,
+                     sampling=clip.sampling)
     result = replace(result, verdict=verdict)
     if clip.truth is None:
         return result

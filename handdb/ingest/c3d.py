@@ -4,7 +4,8 @@ A C3D file holds labelled 3D points per frame. Each label (blanks and NULs aroun
 dropped) is a joint by the one ``joint_map`` rule of
 :func:`~handdb.ingest.observations.resolve_names`: a capture's extra markers must be
 mapped to ``null``, or ignored all at once with ``"*": null``. A point the capture lost in
-a frame (negative residual; non-finite coordinates count as lost) is missing; a residual
+a frame (negative residual; non-finite coordinates, and coordinates exactly 0, 0, 0,
+which exporters without residuals write for a gap, count as lost) is missing; a residual
 of 0 (a point the capture software modelled) is kept. Coordinates are converted from the
 file's ``POINT:UNITS`` (one unit for the file or one per point, all alike; millimetres
 when absent, the C3D default) to the clip's units. Frames count from the file's first
@@ -230,7 +231,9 @@ def read(path: str | Path, spec: ClipSpec, skeleton: Skeleton) -> Positions:
     joints = resolve_names(points.labels, spec, skeleton, path,
                            lambda k: (None, LABELS_PARAMETER))
     known = np.flatnonzero(joints >= 0)
-    present = points.points[:, known, 3] >= 0
+    xyz_known = points.points[:, known, :3]
+    present = ((points.points[:, known, 3] >= 0) & np.isfinite(xyz_known).all(axis=-1)
+               & (xyz_known != 0).any(axis=-1))
     frame, column = np.nonzero(present)
     scale = METERS_PER_UNIT[points.units] / spec.meters_per_unit
     xyz = points.points[frame, known[column], :3] * scale

@@ -197,10 +197,58 @@ class DelimitedTable:
         return encoded.dictionary.to_pylist(), codes
 
 
+#: Field separators that spreadsheets write in "CSV" files for locales whose decimal mark
+#: is a comma, by name, for the refusal of a file that uses one of them.
+FOREIGN_SEPARATORS = {";": "semicolons", "\t": "tabs"}
+
+#: The prefix of the placeholder name given to a column whose header cell is empty.
+UNNAMED_PREFIX = "\0unnamed"
+
+
 def split_header(line: bytes, delimiter: str) -> list[str]:
     """Cells of one header line, trimmed and unquoted (a leading byte-order mark dropped)."""
     text = line.decode("utf-8-sig", errors="replace").strip()
     return [cell.strip().strip('"').strip() for cell in text.split(delimiter)]
+
+
+def check_separator(path: Path, cells: list[str], line: int, delimiter: str = ",") -> None:
+    """Refuse a header line that is one cell holding another separator than ``delimiter``.
+
+    Parameters
+    ----------
+    path
+        The file, for the message.
+    cells
+        The header line's cells, split at ``delimiter`` (:func:`split_header`).
+    line
+        Its 1-based line number.
+    delimiter
+        The separator the format uses.
+
+    Raises
+    ------
+    InputError
+        If the line holds no ``delimiter`` but semicolons or tabs: a spreadsheet saved the
+        file with the separators of a locale that writes decimals with commas.
+    """
+    if len(cells) != 1:
+        return
+    for separator, name in FOREIGN_SEPARATORS.items():
+        if separator in cells[0]:
+            raise InputError(path, f"separates its fields with {name}, not '{delimiter}' (a "
+                             "spreadsheet's CSV for a locale with decimal commas); save it "
+                             f"with '{delimiter}' between fields and '.' in decimals",
+                             line=line, field=cells[0].split(separator)[0])
+
+
+def unnamed_placeholders(names: list[str]) -> list[str]:
+    """``names`` with every empty one replaced by a placeholder no header can hold.
+
+    A column without a name (the index column pandas writes, the empty columns a
+    spreadsheet leaves after the last) is read under :data:`UNNAMED_PREFIX` ``<k>`` and
+    never looked at.
+    """
+    return [name or f"{UNNAMED_PREFIX}{k}" for k, name in enumerate(names)]
 
 
 def read_delimited(path: Path, data: bytes, *, names: list[str], header_lines: int,

@@ -37,6 +37,7 @@ from handdb.hand.skeletons import Skeleton
 from handdb.ingest.delimited import (
     DelimitedTable,
     TextLines,
+    check_separator,
     read_bytes,
     read_delimited,
     split_header,
@@ -89,6 +90,7 @@ def _header(path: Path, data: bytes, lines: TextLines) -> _Layout:
     """Read and check the header rows."""
     first_lines = lines.nonblank[:len(HEADER_LABELS)]
     rows = [split_header(data[lines.start[n - 1]:lines.end[n - 1]], ",") for n in first_lines]
+    check_separator(path, rows[0], int(first_lines[0]))
     labels = [cells[0] for cells in rows]
     expected = [label for label in HEADER_LABELS
                 if label != "individuals" or labels[1:2] == ["individuals"]]
@@ -133,6 +135,16 @@ def _individual_columns(path: Path, layout: _Layout, spec: ClipSpec) -> np.ndarr
                          f"{path.name} ({', '.join(names)}); names are case-sensitive",
                          field="individual", clip_id=spec.clip_id)
     return np.array([cell == chosen for cell in cells])
+
+
+def _named_columns(layout: _Layout) -> np.ndarray:
+    """``(C,) bool``: the data columns with a body part or a coordinate in the header.
+
+    A column whose header cells are all empty is one a spreadsheet left after the last,
+    never read.
+    """
+    return np.array([bool(bodypart or coord) for bodypart, coord in
+                     zip(layout.rows["bodyparts"][1], layout.rows["coords"][1], strict=True)])
 
 
 def _columns(path: Path, layout: _Layout, chosen: np.ndarray) -> list[tuple[str, str]]:
@@ -235,7 +247,7 @@ def read(path: str | Path, spec: ClipSpec, skeleton: Skeleton) -> Observations:
     data = read_bytes(path)
     lines = TextLines.of(data)
     layout = _header(path, data, lines)
-    chosen = _individual_columns(path, layout, spec)
+    chosen = _individual_columns(path, layout, spec) & _named_columns(layout)
     columns = _columns(path, layout, chosen)
     bodyparts = list(dict.fromkeys(bodypart for bodypart, _ in columns))
     bodyparts_line = layout.rows["bodyparts"][0]

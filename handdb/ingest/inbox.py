@@ -48,6 +48,18 @@ from handdb.ingest.registry import (
 from handdb.ingest.sidecar import parse_sidecar, validate_clip_id
 
 SIDECAR = "sidecar"
+
+#: What to do with a file the tools write that no format reads, by its name's ending.
+UNREAD_HINTS = {
+    ".h5": "it is DeepLabCut's HDF5 table; handdb reads the CSV DeepLabCut writes beside it "
+           "with save_as_csv=True, renamed {clip_id}.dlc.csv",
+    ".csv": "name a CSV by its layout, {clip_id}.tracks.csv, .dlc.csv, .mediapipe.csv or "
+            ".markers.csv",
+    ".json": "name a JSON file by its tool, {clip_id}.mediapipe.json, .mediapipe-world.json "
+             "or .interhand.json; OpenPose's files go in a folder {clip_id}.openpose",
+    ".tsv": "a Qualisys export is read as {clip_id}.qtm.tsv",
+    ".txt": "name a text export by its tool, {clip_id}.maya.txt or .dhg.txt",
+}
 #: Bytes read at a time when hashing an input file.
 HASH_CHUNK_BYTES = 1 << 20
 
@@ -170,6 +182,26 @@ def _case_collisions(clip_ids: list[str]) -> dict[str, str]:
     return refused
 
 
+def _unread_files(clip_id: str, inbox: Path) -> str:
+    """What the refusal of a clip without a track file adds about its files no format read.
+
+    Returns
+    -------
+    str
+        ``""``, or ``"; '<name>' is not read: <hint>"`` for each entry of the inbox
+        named ``<clip_id>.<anything>`` that is no sidecar and that no format claims: a file
+        of the clip under a name handdb does not read, such as DeepLabCut's ``.h5``.
+    """
+    unread = sorted(path.name for path in inbox.glob(f"{clip_id}.*")
+                    if not path.name.endswith(SIDECAR_SUFFIX) and match_format(path) is None)
+    notes = []
+    for name in unread:
+        hint = next((text for end, text in UNREAD_HINTS.items() if name.endswith(end)), None)
+        notes.append(f"{quoted(name)} is not read"
+                     + (f": {hint.format(clip_id=clip_id)}" if hint else ""))
+    return "".join(f"; {note}" for note in notes)
+
+
 def _assemble(clip_id: str, inbox: Path,
               found: dict[str, list[tuple[str, Path]]]) -> ClipEntry | list[InputError]:
     """Make one clip of the entries found for ``clip_id``, or say why not."""
@@ -182,8 +214,8 @@ def _assemble(clip_id: str, inbox: Path,
                 for _, path in tracks + truths]
     if not tracks:
         return [InputError(sidecars[0][1], f"clip '{clip_id}' has no track file: add "
-                           f"{clip_id}<suffix> with one of the suffixes {track_suffixes}",
-                           clip_id=clip_id)]
+                           f"{clip_id}<suffix> with one of the suffixes {track_suffixes}"
+                           + _unread_files(clip_id, inbox), clip_id=clip_id)]
     if len(tracks) > 1:
         names = " and ".join(path.name for _, path in tracks)
         return [InputError(tracks[1][1], f"clip '{clip_id}' has two track files, {names}; "
@@ -305,10 +337,16 @@ def _dense(rows: Observations | Positions, values: np.ndarray, n_frames: int) ->
 
 def _check_plausible(spec: ClipSpec, observations: Observations | Positions,
                      truth: Positions | None, three_d: bool) -> None:
-    """Refuse coordinates no hand can have: beyond the limits of :mod:`handdb.ingest.limits`."""
+    """Refuse coordinates no hand can have.
+
+    Coordinates beyond the limits of :mod:`handdb.ingest.limits`, and a 2D track whose
+    every point lies within a pixel of the origin (normalised, not pixels).
+    """
     metres = MAX_COORDINATE_METRES / spec.meters_per_unit
     observations.check_magnitude(metres if three_d else MAX_PIXEL_COORDINATE,
                                  spec.units if three_d else "px")
+    if isinstance(observations, Observations):
+        observations.check_pixels()
     if truth is not None:
         truth.check_magnitude(metres, spec.units)
 

@@ -55,6 +55,10 @@ MAX_IMAGE_SIDE = 100_000
 #: The largest image coordinate accepted, pixels (ten times the largest sensor side).
 MAX_PIXEL_COORDINATE = 1e6
 
+#: 2D points all within this magnitude are normalised coordinates (a tool's [0, 1] or
+#: [-1, 1] of the image), not pixels: a hand is more than two pixels across.
+NORMALISED_BOUND = 1.0
+
 #: The largest 3D coordinate accepted, metres: capture volumes are rooms, not kilometres.
 MAX_COORDINATE_METRES = 100.0
 

@@ -17,9 +17,11 @@ from handdb.hand.skeletons import Skeleton
 from handdb.ingest.delimited import (
     DelimitedTable,
     TextLines,
+    check_separator,
     read_bytes,
     read_delimited,
     split_header,
+    unnamed_placeholders,
     write_csv,
 )
 from handdb.ingest.limits import quoted
@@ -33,26 +35,29 @@ def read_long_csv(path: Path, required: tuple[str, ...],
     Raises
     ------
     InputError
-        For an empty file, a header that lacks a required column or names an unknown or
-        repeated one, a file without data rows, or a row with the wrong number of cells.
+        For an empty file, fields separated by semicolons or tabs, a header that lacks a
+        required column or names an unknown or repeated one, a file without data rows, or
+        a row with the wrong number of cells. Columns with an empty header cell (pandas'
+        index, a spreadsheet's trailing empty columns) are read but never used.
     """
     data = read_bytes(path)
     lines = TextLines.of(data)
     header_line = int(lines.nonblank[0])
     header = split_header(data[lines.start[header_line - 1]:lines.end[header_line - 1]], ",")
+    check_separator(path, header, header_line)
     accepted = ", ".join(required) + "".join(f"[, {name}]" for name in optional)
     for name in header:
-        if name not in required + optional:
+        if name and name not in required + optional:
             raise InputError(path, f"unknown column {quoted(name)}; the header must be "
                              f"{accepted}", line=header_line, field=name)
-        if header.count(name) > 1:
+        if name and header.count(name) > 1:
             raise InputError(path, "column named twice in the header", line=header_line,
                              field=name)
     for name in required:
         if name not in header:
             raise InputError(path, f"the header lacks column '{name}'; it must be {accepted}",
                              line=header_line, field=name)
-    table = read_delimited(path, data, names=header, header_lines=1)
+    table = read_delimited(path, data, names=unnamed_placeholders(header), header_lines=1)
     if not table.n_rows:
         raise InputError(path, "has a header but no data rows", line=header_line)
     return table

@@ -19,8 +19,9 @@ entry has its frame; a list of bare hands is refused, as frames without a hand w
 
 ``coordinates`` (the document's, else the sidecar's) is ``"normalized"`` (the default:
 ``x, y`` in [0, 1] of the image, which the sidecar's ``image`` must give; values beyond
-[-0.5, 1.5] are refused as probably pixels) or ``"pixels"``. ``z`` is not used. A frame
-without a hand, or not listed, has every point missing.
+[-0.5, 1.5] are refused as probably pixels, and a hand centred at the origin in every
+frame as world landmarks) or ``"pixels"``. ``z`` is not used. A frame without a hand, or
+not listed, has every point missing.
 
 Which hand, when an entry holds several: the sidecar's ``hand_index`` (its position in
 the entry's list, MediaPipe's detection order) or ``handedness`` (its label exactly as
@@ -59,6 +60,12 @@ LANDMARK_WIDTHS = (3, 4)
 
 #: Normalised coordinates beyond these bounds are not a hand in (or near) the image.
 NORMALISED_RANGE = (-0.5, 1.5)
+
+#: A hand whose landmarks centre within this of the origin in every frame, in normalised
+#: coordinates, holds MediaPipe's world landmarks (metres around the hand's centre), not
+#: image ones: an image hand centred there would sit at the image's top-left corner, mostly
+#: outside it, all the time.
+WORLD_CENTRE_BOUND = 0.05
 
 #: Milliseconds per second, for Tasks timestamps.
 MS_PER_SECOND = 1000.0
@@ -327,6 +334,36 @@ def check_normalised(xy: np.ndarray, path: Path, field: str) -> None:
                          'these pixels? Set "coordinates": "pixels"', field=field)
 
 
+def check_not_world(xy: np.ndarray, path: Path, where: str) -> None:
+    """Refuse normalised landmarks that are MediaPipe's world landmarks.
+
+    Parameters
+    ----------
+    xy
+        ``(F, 21, 2) float64``: the ``x, y`` of every frame's hand, normalised; NaN where a
+        landmark is absent.
+    path
+        The file, for the message.
+    where
+        Where the landmarks are in the file, for the message.
+
+    Raises
+    ------
+    InputError
+        If every frame's hand centres within :data:`WORLD_CENTRE_BOUND` of the origin.
+    """
+    if not xy.size or not np.isfinite(xy).any():
+        return
+    centres = np.nanmean(xy, axis=1)
+    if np.nanmax(np.abs(centres)) < WORLD_CENTRE_BOUND:
+        raise InputError(path, "every frame's hand centres within "
+                         f"{WORLD_CENTRE_BOUND:g} of the origin: these are MediaPipe's world "
+                         "landmarks (metres around the hand), not image ones; save the image "
+                         "landmarks (hand_landmarks) here and read world landmarks as "
+                         "<clip_id>.mediapipe-world.json (a hand truly at the image's corner: "
+                         'give pixels with "coordinates": "pixels")', field=where)
+
+
 def read(path: str | Path, spec: ClipSpec, skeleton: Skeleton) -> Observations:
     """Read a MediaPipe landmarks JSON file (layouts in the module docstring).
 
@@ -354,6 +391,8 @@ def read(path: str | Path, spec: ClipSpec, skeleton: Skeleton) -> Observations:
         frames.append(frame)
         points.append(np.column_stack([found.landmarks[:, :2] * scale, confidence]))
     points_array = np.array(points).reshape(-1, hand.n_joints, 3)[:, kept]
+    if scale[0] != 1.0:
+        check_not_world(points_array[..., :2] / scale, path, "landmarks")
     source, files = single_file_rows(path, points_array.shape[0] * kept.size)
     return Observations(
         frame=np.repeat(np.array(frames, dtype=np.int64), kept.size),

@@ -35,6 +35,7 @@ from handdb.ingest.long_csv import read_long_csv
 from handdb.ingest.mediapipe import (
     HAND_SKELETON,
     NORMALISED_RANGE,
+    check_not_world,
     coordinate_system,
     image_scale,
 )
@@ -149,6 +150,9 @@ def read(path: str | Path, spec: ClipSpec, skeleton: Skeleton) -> Observations:
             raise table.error(int(row), "xy"[axis], f"{xy[row, axis]:g} lies far outside the "
                               f"image (normalised coordinates lie within [{low}, {high}]); "
                               'are these pixels? Set "coordinates": "pixels" in the sidecar')
+        by_frame = np.full((int(frame.max()) + 1, hand.n_joints, 2), np.nan)
+        by_frame[frame, joint] = xy
+        check_not_world(by_frame[np.isfinite(by_frame).any(axis=(1, 2))], path, "x")
     uv = xy * scale
     source, files = single_file_rows(path, table.n_rows)
     return Observations(

@@ -20,6 +20,7 @@ from handdb.errors import InputError
 from handdb.hand.skeletons import Skeleton
 from handdb.ingest.limits import (
     MAX_FRAMES,
+    NORMALISED_BOUND,
     frame_limit_reason,
     is_sparse,
     is_stray_run,
@@ -109,9 +110,25 @@ def resolve_names(names: Sequence[str], spec: ClipSpec, skeleton: Skeleton,
         line, field = locate(0)
         shown = ", ".join(quoted(n) for n in names[:8]) + (", ..." if len(names) > 8 else "")
         raise InputError(file, f"none of its names ({shown}) is a joint of skeleton "
-                         f"'{skeleton.name}' once the sidecar's joint_map is applied",
+                         f"'{skeleton.name}' once the sidecar's joint_map is applied; "
+                         + _joint_map_advice(names, skeleton),
                          line=line, field=field, clip_id=spec.clip_id)
     return indices
+
+
+def _joint_map_advice(names: Sequence[str], skeleton: Skeleton) -> str:
+    """How to map a file's names that are none of ``skeleton``'s joints.
+
+    Names that are a joint once a tool's prefix (``Subject:`` of Vicon) is cut and case is
+    ignored are offered as the example entries of the ``joint_map``.
+    """
+    matches = {name: bare for name in names
+               if (bare := name.rsplit(":", 1)[-1].strip().lower()) in skeleton.joints}
+    example = ", ".join(f'"{name}": "{joint}"' for name, joint in list(matches.items())[:3])
+    if not example:
+        example = f'"{names[0]}": "wrist"'
+    return (f"map them to its joints in the sidecar's joint_map, e.g. \"joint_map\": "
+            f"{{{example}, ...}}")
 
 
 def check_joint_map_keys(spec: ClipSpec, named: Mapping[str, Collection[str]]) -> None:
@@ -330,6 +347,28 @@ class Observations(_Rows):
 
     def _coordinates(self) -> dict[str, np.ndarray]:
         return {"u": self.u, "v": self.v}
+
+    def check_pixels(self) -> None:
+        """Refuse a track normalised to the image instead of in pixels.
+
+        Such a track's every point lies within :data:`NORMALISED_BOUND` pixels of the
+        origin: a hand is more than two pixels across.
+
+        Raises
+        ------
+        InputError
+            At the point farthest from the origin, saying how to give pixels.
+        """
+        uv = self.uv
+        seen = np.flatnonzero(np.isfinite(uv).all(axis=1))
+        if not seen.size or np.abs(uv[seen]).max() > NORMALISED_BOUND:
+            return
+        row = int(seen[np.argmax(np.abs(uv[seen]).max(axis=1))])
+        raise self.error(row, "u", f"every point lies within {NORMALISED_BOUND:g} px of the "
+                         "origin, so the coordinates are normalised to the image, not "
+                         "pixels: multiply them by the image's width and height (MediaPipe's "
+                         "landmarks: keep them in .mediapipe.csv or .mediapipe.json, which "
+                         'scale them by the sidecar\'s "image")')
 
 
 @dataclass(frozen=True, kw_only=True)

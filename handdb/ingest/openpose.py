@@ -10,7 +10,8 @@ every point missing. Hidden files (``._name`` of macOS included), sub-folders an
 files are ignored, as by the clip's content hash.
 
 Which person: the sidecar's ``person``, an index into ``people`` (only when every file
-with people has the same number of them: OpenPose orders people per frame) or
+with people has the same number of them and they keep their places from file to file:
+OpenPose orders people per frame) or
 ``{"id": n}``, the ``person_id`` OpenPose's tracking gives (a frame without it has every
 point missing). Without ``person`` no file may hold more than one person.
 
@@ -29,12 +30,19 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from scipy.optimize import linear_sum_assignment
+from scipy.spatial.distance import cdist
 
 from handdb.clip import ClipSpec
 from handdb.errors import InputError
 from handdb.hand.skeletons import Skeleton, correspondence, load_skeleton
 from handdb.ingest.jsondoc import load_json, number_array, preview
-from handdb.ingest.limits import MAX_FRAMES, folder_files, frame_limit_reason
+from handdb.ingest.limits import (
+    MAX_FRAMES,
+    NORMALISED_BOUND,
+    folder_files,
+    frame_limit_reason,
+)
 from handdb.ingest.observations import Observations, resolve_names
 from handdb.ingest.registry import InputFormat
 
@@ -49,8 +57,6 @@ HAND_KEYS = {"right": "hand_right_keypoints_2d", "left": "hand_left_keypoints_2d
 
 KEYPOINT_FILE = re.compile(r"(\d+)_keypoints\.json$")
 
-#: Keypoints all within this magnitude are normalised coordinates, not pixels.
-NORMALISED_BOUND = 1.0
 
 
 def frame_files(folder: Path) -> list[tuple[int, Path]]:
@@ -148,7 +154,65 @@ def _select(people_by_file: Sequence[tuple[Path, list[dict[str, Any]]]], spec: C
         raise InputError(spec.path, f"is {spec.person}, but {path.name} holds {n} "
                          f"{'person' if n == 1 else 'people'}", field="person",
                          clip_id=spec.clip_id)
+    _check_order_kept(people_by_file)
     return [spec.person if people else None for _, people in people_by_file]
+
+
+def person_centres(people: list[dict[str, Any]]) -> np.ndarray:
+    """``(P, 2) float64``: the mean of each person's detected 2D keypoints, pixels.
+
+    Every ``*_keypoints_2d`` array counts (body, face, hands); keypoints of confidence 0
+    are not detected. NaN for a person without any.
+    """
+    centres = np.full((len(people), 2), np.nan)
+    for k, person in enumerate(people):
+        arrays = [np.asarray(values, dtype=np.float64).reshape(-1, VALUES_PER_POINT)
+                  for key, values in person.items()
+                  if key.endswith("_keypoints_2d") and isinstance(values, list) and values
+                  and len(values) % VALUES_PER_POINT == 0
+                  and all(isinstance(v, int | float) for v in values)]
+        points = np.concatenate(arrays) if arrays else np.zeros((0, VALUES_PER_POINT))
+        detected = points[points[:, 2] > 0, :2]
+        if detected.size:
+            centres[k] = detected.mean(axis=0)
+    return centres
+
+
+def _check_order_kept(people_by_file: Sequence[tuple[Path, list[dict[str, Any]]]]) -> None:
+    """Refuse people who trade places in ``people`` from one frame's file to the next.
+
+    Without ``--tracking`` OpenPose lists people in its own order each frame, so an index
+    may follow one person, then another. The people are matched between consecutive files
+    with people by their keypoints' centres (:func:`scipy.optimize.linear_sum_assignment`);
+    they traded places when the best match is not the listed order and beats it by more
+    than the distance between the two nearest people: a jump noise cannot make.
+
+    Raises
+    ------
+    InputError
+        Naming the file where the order changes and the people who trade places.
+    """
+    previous: tuple[Path, np.ndarray] | None = None
+    for path, people in people_by_file:
+        if not people:
+            continue
+        centres = person_centres(people)
+        if previous is not None and len(people) > 1 and np.isfinite(centres).all():
+            before_path, before = previous
+            cost = cdist(before, centres)
+            rows, columns = linear_sum_assignment(cost)
+            listed = float(np.trace(cost))
+            best = float(cost[rows, columns].sum())
+            separation = float(np.min(cdist(before, before)[~np.eye(len(before), dtype=bool)]))
+            if listed - best > separation:
+                was = int(rows[columns != rows][0])
+                raise InputError(path, f"people[{columns[was]}] here is people[{was}] "
+                                 f"of {before_path.name}: OpenPose ran without --tracking and "
+                                 "orders people per frame, so an index follows one person, "
+                                 'then another; run it with --tracking 1 and select by '
+                                 '"person": {"id": n}, or split the folder', field="people")
+        previous = (path, centres) if np.isfinite(centres).all() else previous
+
 
 
 def hand_keypoints(path: Path, person: dict[str, Any], index: int, hand: str

@@ -132,11 +132,12 @@ def _column_names(path: Path, data: bytes, lines: TextLines, header: _Header,
     if cells != expected:
         wrong = next((k for k, (a, b) in enumerate(zip(cells, expected, strict=False))
                       if a != b), min(len(cells), len(expected)))
-        want = expected[wrong] if wrong < len(expected) else "nothing"
-        got = quoted(cells[wrong]) if wrong < len(cells) else "nothing"
-        raise InputError(path, f"column {wrong + 1} is {got}, expected {quoted(want)} (the "
-                         "columns follow MARKER_NAMES)", line=header.columns_line,
-                         field=want if wrong < len(expected) else "Frame")
+        want = (quoted(expected[wrong]) if wrong < len(expected)
+                else f"no column after {quoted(expected[-1])}")
+        got = quoted(cells[wrong]) if wrong < len(cells) else "missing"
+        raise InputError(path, f"column {wrong + 1} is {got}, expected {want} (the columns "
+                         "follow MARKER_NAMES)", line=header.columns_line,
+                         field=expected[wrong] if wrong < len(expected) else "Frame")
     return expected
 
 

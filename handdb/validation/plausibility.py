@@ -11,7 +11,7 @@ Before a clip is committed its result is checked against what hands are
   tracking noise, not by :data:`CONSTANCY_LIMIT` of its length;
 * **joint angles**: the flexion of every finger joint in the 3D result within its range of
   motion, widened by :data:`ANGLE_TOLERANCE_DEG`, in all but :data:`FRAME_SHARE_LIMIT` of
-  the frames;
+  the frames that hold the bend for more than one frame (:data:`PERSISTENCE_FRAMES`);
 * **fit residual**: for a model fit, the distance from the markers to the model's joints,
   frame by frame, below :data:`RESIDUAL_LIMIT_MM` in all but that share of the frames;
 * **joint order**: the four knuckles in order across the palm (index, middle, ring,
@@ -31,8 +31,9 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.ndimage import median_filter
 
-from handdb.clip import METERS_PER_UNIT
+from handdb.clip import IMAGES, METERS_PER_UNIT, VIDEO
 from handdb.hand import anatomy
 from handdb.hand.layout import palm_normals, unit_vectors
 from handdb.hand.skeletons import FINGERS, Skeleton
@@ -63,6 +64,15 @@ ANGLE_TOLERANCE_DEG = 35.0
 #: Share of the frames that may break an angle or residual limit before the clip is
 #: flagged: a few frames of a tracker's glitch are noise, not a hand.
 FRAME_SHARE_LIMIT = 0.1
+
+#: Frames of a video clip over which a joint's bend must hold to count against the clip:
+#: a frame counts when most of the frames centred on it break the range. A hand holds a pose
+#: longer than a frame while a detector's glitch (a missed keypoint, a jump to the other
+#: hand) lasts one, so a single frame beyond range between plausible ones is noise: the
+#: real OpenPose signer's first frame, its thumb undetected and filled, bends the thumb MCP
+#: 106 degrees where the next eight frames bend it 5-31. Frames alternating in and out of
+#: range still count. Independent images have no neighbours: each counts alone.
+PERSISTENCE_FRAMES = 3
 
 #: Largest median distance of a frame's markers from the fitted joints, mm.
 RESIDUAL_LIMIT_MM = 10.0
@@ -258,9 +268,48 @@ def flexion_angles(skeleton: Skeleton, xyz: np.ndarray, hand: str
     return angles
 
 
-def check_angles(skeleton: Skeleton, xyz: np.ndarray, hand: str
+def persistent_frames(frames: np.ndarray) -> np.ndarray:
+    """The frames where most of the :data:`PERSISTENCE_FRAMES` centred on them are set.
+
+    Parameters
+    ----------
+    frames
+        ``(T,) bool``: the frames of a video clip that break a limit.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(T,) bool``: a running majority, the clip's ends mirrored: a lone frame drops
+        out, a run of two or more stays, and frames alternating in and out stay. A clip
+        of one frame is that frame.
+    """
+    if len(frames) < 2:
+        return frames.copy()  # scipy mirrors a single frame from memory beyond it
+    return median_filter(frames, size=PERSISTENCE_FRAMES, mode="mirror")
+
+
+def check_angles(skeleton: Skeleton, xyz: np.ndarray, hand: str, sampling: str = VIDEO
                  ) -> tuple[list[str], np.ndarray]:
-    """Frames whose finger joints bend beyond what they can, widened by the tolerance."""
+    """Frames whose finger joints bend beyond what they can, widened by the tolerance.
+
+    Parameters
+    ----------
+    skeleton
+        The clip's skeleton.
+    xyz
+        ``(T, J, 3) float64``: the clip's 3D joints, any unit; NaN where absent.
+    hand
+        ``"left"`` or ``"right"``.
+    sampling
+        The clip's sampling (:data:`handdb.clip.SAMPLINGS`): a video clip is flagged by
+        the share of frames whose bend persists (:func:`persistent_frames`), a clip of
+        independent images by the share of images.
+
+    Returns
+    -------
+    reasons, frames
+        The reason found, and ``(T,) bool``: every frame beyond range, persistent or not.
+    """
     frames = np.zeros(len(xyz), dtype=bool)
     worst: dict[str, tuple[float, float]] = {}
     for key, angle in flexion_angles(skeleton, xyz, hand).items():
@@ -272,7 +321,8 @@ def check_angles(skeleton: Skeleton, xyz: np.ndarray, hand: str
         frames |= bad
         if bad.any():
             worst[f"{key[0]} {key[1].upper()}"] = (float(np.nanmax(excess)), float(bad.mean()))
-    share = float(frames.mean()) if len(frames) else 0.0
+    counted = frames if sampling == IMAGES else persistent_frames(frames)
+    share = float(counted.mean()) if len(counted) else 0.0
     if share <= FRAME_SHARE_LIMIT:
         return [], frames
     detail = ", ".join(f"{name} by up to {excess:.0f} degrees in {part:.0%} of frames"
@@ -403,7 +453,8 @@ def check_joint_order(skeleton: Skeleton, xyz: np.ndarray) -> tuple[list[str], n
 
 def assess(skeleton: Skeleton, units: str, hand: str, lengths: np.ndarray,
            xyz: np.ndarray | None, residual: np.ndarray | None = None, *,
-           n_frames: int = 0, labelled: np.ndarray | None = None) -> Verdict:
+           n_frames: int = 0, labelled: np.ndarray | None = None,
+           sampling: str = VIDEO) -> Verdict:
     """Check a clip's result against what hands can be.
 
     Parameters
@@ -425,6 +476,9 @@ def assess(skeleton: Skeleton, units: str, hand: str, lengths: np.ndarray,
         ``(T, J, D) float64``: the points as the input named them, for the joint order
         (a marker clip's markers, which a model fit would put back in order); ``xyz`` by
         default.
+    sampling
+        The clip's sampling, :data:`handdb.clip.VIDEO` or :data:`handdb.clip.IMAGES`
+        (see :func:`check_angles`).
     """
     reasons, bones = check_bone_lengths(skeleton, lengths, units)
     n_frames = n_frames if xyz is None else len(xyz)
@@ -438,7 +492,7 @@ def assess(skeleton: Skeleton, units: str, hand: str, lengths: np.ndarray,
         found, unsteady = check_constancy(skeleton, xyz)
         reasons += found
         bones |= unsteady
-        found, bent = check_angles(skeleton, xyz, hand)
+        found, bent = check_angles(skeleton, xyz, hand, sampling)
         reasons += found
         frames |= bent
     if residual is not None:

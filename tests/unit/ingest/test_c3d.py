@@ -54,6 +54,19 @@ def test_c3d_whose_every_label_is_ignored_is_refused(tmp_path):
     assert caught.value.field == "POINT:LABELS"
 
 
+@pytest.mark.parametrize(("labels", "example"), [
+    (["RHand:RWRA", "RHand:index_tip", "RHand:Thumb_Tip"],
+     '"joint_map": {"RHand:index_tip": "index_tip", "RHand:Thumb_Tip": "thumb_tip", ...}'),
+    (["A", "B"], '"joint_map": {"A": "wrist", ...}'),
+])
+def test_labels_of_another_convention_are_refused_with_a_joint_map_to_write(tmp_path, labels,
+                                                                            example):
+    path = write_labelled(tmp_path / "m01.c3d", labels)
+    with pytest.raises(InputError) as caught:
+        c3d_reader.read(path, marker_spec(joint_map={"*": None}), SKELETON)
+    assert caught.value.reason.endswith(f"sidecar's joint_map, e.g. {example}")
+
+
 def test_two_labels_for_one_joint_are_refused(tmp_path):
     path = write_labelled(tmp_path / "m01.c3d", ["wrist", "WRIST2"])
     with pytest.raises(InputError, match="'wrist' and 'WRIST2' both map to joint 'wrist'"):
@@ -126,3 +139,21 @@ def test_rotations_without_points_are_refused_saying_so(tmp_path):
     assert info.value.field == "POINT:USED"
     assert "holds no 3D points (it has 3 rotations (segment orientations" in info.value.reason
     assert "export the markers to C3D" in info.value.reason
+
+
+def test_gaps_written_as_the_origin_without_a_residual_are_missing(tmp_path):
+    writer = c3d.Writer(point_rate=120.0, point_units="mm")
+    writer.set_point_labels(["wrist", "index_tip"])
+    frames = np.zeros((4, 2, 5), dtype=np.float32)
+    frames[..., :3] = [[10.0, 20.0, 30.0], [40.0, 50.0, 60.0]]
+    frames[1, 1, :3] = 0.0                   # a gap as an exporter without residuals writes it
+    frames[2, 0, :3] = [0.0, 0.0, 5.0]       # a point on an axis is a point
+    writer.add_frames([(frame, np.zeros((0, 0), dtype=np.float32)) for frame in frames])
+    path = tmp_path / "m01.c3d"
+    with pytest.warns(UserWarning), path.open("wb") as handle:
+        writer.write(handle)
+    markers = dense_markers(c3d_reader.read(path, marker_spec(fps=120.0), SKELETON))
+    tip, wrist = SKELETON.index("index_tip"), SKELETON.index("wrist")
+    assert np.isnan(markers[1, tip]).all()
+    np.testing.assert_allclose(markers[[0, 2, 3], tip], [[40.0, 50.0, 60.0]] * 3)
+    np.testing.assert_allclose(markers[2, wrist], [0.0, 0.0, 5.0])

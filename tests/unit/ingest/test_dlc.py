@@ -81,3 +81,17 @@ def test_bad_headers(tmp_path, spec_for, mediapipe21, header, line, field, messa
     with pytest.raises(InputError, match=message) as info:
         read_text(tmp_path, spec_for, mediapipe21, header, joint_map={"WRIST": "wrist"})
     assert (info.value.line, info.value.field) == (line, field)
+
+
+def test_empty_columns_after_the_last_body_part_are_ignored(tmp_path, spec_for, mediapipe21):
+    rows = [line + ",," for line in (HEADER + "0,1,2,0.9,3,4,0.8\n").splitlines()]
+    obs = read_text(tmp_path, spec_for, mediapipe21, "\n".join(rows) + "\n")
+    assert obs.uv.tolist() == [[1.0, 2.0], [3.0, 4.0]]
+
+
+def test_a_semicolon_separated_file_is_refused_with_what_to_save(tmp_path, spec_for,
+                                                                  mediapipe21):
+    text = (HEADER + "0,1.5,2,0.9,3,4,0.8\n").replace(",", ";").replace("1.5", "1,5")
+    with pytest.raises(InputError, match="separates its fields with semicolons") as info:
+        read_text(tmp_path, spec_for, mediapipe21, text)
+    assert (info.value.line, info.value.field) == (1, "scorer")

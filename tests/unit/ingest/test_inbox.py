@@ -69,6 +69,25 @@ def test_discover_refuses_entries_that_do_not_make_a_clip(inbox, write_sidecar):
     assert "not allowed" in refused["we$ird.clip.json"]
 
 
+@pytest.mark.parametrize(("name", "hint"), [
+    ("hand.h5", "DeepLabCut's HDF5 table; handdb reads the CSV DeepLabCut writes beside it "
+                "with save_as_csv=True, renamed hand.dlc.csv"),
+    ("hand.csv", "name a CSV by its layout, hand.tracks.csv"),
+    ("hand.keypoints.json", "OpenPose's files go in a folder hand.openpose"),
+])
+def test_a_clip_whose_file_no_format_reads_is_told_what_to_rename(tmp_path, write_sidecar,
+                                                                  name, hint):
+    write_sidecar(tmp_path, "hand")
+    (tmp_path / name).write_bytes(b"\x89HDF\r\n")
+    write_sidecar(tmp_path, "hand.2")
+    (tmp_path / "hand.2.tracks.csv").write_text("frame,joint,u,v\n0,wrist,1,2\n")
+    scan = discover(tmp_path)
+    assert [entry.clip_id for entry in scan.clips] == ["hand.2"]
+    (error,) = scan.refused
+    assert f"'{name}' is not read: " in error.reason and hint in error.reason
+    assert "hand.2" not in error.reason
+
+
 def test_maya_export_and_a_truth_file_are_two_truths(tmp_path, write_sidecar):
     write_sidecar(tmp_path, "m", skeleton="thesis21")
     (tmp_path / "m.maya.txt").write_text("j0 0 1 2 3\n")

@@ -5,6 +5,7 @@ import pytest
 
 from handdb.errors import InputError
 from handdb.ingest import mediapipe, mediapipe_csv, mediapipe_world
+from tests.unit.ingest.conftest import hand_track
 from tests.unit.ingest.test_markers_csv import SKELETON, marker_spec
 
 IMAGE = {"width": 640, "height": 480}
@@ -131,3 +132,40 @@ def test_world_landmarks_are_required_for_a_world_clip(tmp_path):
     path.write_text(json.dumps({"frames": [{"frame": 0, "landmarks": [[0.5, 0.5, 0]] * 21}]}))
     with pytest.raises(InputError, match="holds no world landmarks"):
         mediapipe_world.read(path, marker_spec(), SKELETON)
+
+
+def world_like(mediapipe21, n_frames=6):
+    """A moving hand as MediaPipe's world landmarks: metres around the hand's centre."""
+    track = hand_track(mediapipe21, n_frames)
+    return (track - track.mean(axis=1, keepdims=True)) / 1000.0
+
+
+def landmark_rows(xy):
+    return "frame,landmark,x,y\n" + "".join(
+        f"{t},{k},{x:.6f},{y:.6f}\n" for t, frame in enumerate(xy)
+        for k, (x, y) in enumerate(frame))
+
+
+@pytest.mark.parametrize("layout", ["csv", "json"])
+def test_world_landmarks_given_as_image_landmarks_are_refused(tmp_path, spec_for, mediapipe21,
+                                                              layout):
+    world = world_like(mediapipe21)
+    if layout == "csv":
+        with pytest.raises(InputError, match=r"world landmarks .*\.mediapipe-world") as info:
+            read_csv(tmp_path, spec_for, mediapipe21, landmark_rows(world))
+        assert info.value.field == "x"
+        return
+    path = tmp_path / "clip.mediapipe.json"
+    points = np.concatenate([world, np.zeros(world.shape[:2] + (1,))], axis=-1)
+    path.write_text(json.dumps({"frames": [{"frame": t, "landmarks": frame.tolist()}
+                                           for t, frame in enumerate(points)]}))
+    with pytest.raises(InputError, match="world landmarks") as info:
+        mediapipe.read(path, spec_for(tmp_path, image=IMAGE), mediapipe21)
+    assert info.value.field == "landmarks"
+
+
+def test_a_hand_that_passes_the_image_corner_is_read(tmp_path, spec_for, mediapipe21):
+    xy = world_like(mediapipe21) + np.linspace(0.0, 0.3, 6)[:, None, None]
+    obs = read_csv(tmp_path, spec_for, mediapipe21, landmark_rows(xy))
+    assert obs.n_rows == 6 * 21
+    np.testing.assert_allclose(obs.uv[:21], xy[0] * [640, 480], atol=1e-3)

@@ -121,3 +121,36 @@ def test_empty_folder_and_repeated_frame_numbers(tmp_path, spec_for, mediapipe21
     with pytest.raises(InputError, match="frame 4 is also in a_000000000004") as info:
         openpose.read(folder, spec_for(tmp_path), mediapipe21)
     assert info.value.file.endswith("b_000000000004_keypoints.json")
+
+
+def two_people(folder, order_by_frame, step=2.0):
+    """Two signers 300 px apart, moving ``step`` px a frame, listed in the given orders."""
+    for frame, order in enumerate(order_by_frame):
+        signers = []
+        for x in (100.0, 400.0):
+            points = np.tile([x + step * frame, 200.0, 0.9], 21)
+            points[0::3] += np.arange(21)
+            signers.append({"person_id": [-1], "pose_keypoints_2d": [x, 150.0, 0.8],
+                            "hand_right_keypoints_2d": points.tolist()})
+        keypoint_file(folder, frame, [signers[k] for k in order])
+
+
+def test_people_who_trade_places_without_tracking_are_refused(tmp_path, spec_for,
+                                                               mediapipe21):
+    folder = tmp_path / "clip.openpose"
+    two_people(folder, [(0, 1)] * 3 + [(1, 0)] * 3)
+    with pytest.raises(InputError, match=r"people\[1\] here is people\[0\] of "
+                       r"clip_000000000002_keypoints.json.*--tracking 1") as info:
+        openpose.read(folder, spec_for(tmp_path, person=1), mediapipe21)
+    assert info.value.file.endswith("clip_000000000003_keypoints.json")
+    assert info.value.field == "people"
+
+
+@pytest.mark.parametrize("step", [2.0, 40.0])
+def test_people_who_keep_their_places_are_read_by_index(tmp_path, spec_for, mediapipe21,
+                                                        step):
+    folder = tmp_path / "clip.openpose"
+    two_people(folder, [(0, 1)] * 6, step=step)
+    obs = openpose.read(folder, spec_for(tmp_path, person=1), mediapipe21)
+    wrists = obs.uv[obs.joint == 0]
+    np.testing.assert_allclose(wrists[:, 0], 400.0 + step * np.arange(6))

@@ -2,7 +2,8 @@ import numpy as np
 import pytest
 
 from handdb.errors import InputError
-from handdb.ingest import tracks_csv
+from handdb.ingest import discover, load_clip, tracks_csv
+from tests.unit.ingest.conftest import hand_track
 
 
 def read_text(tmp_path, spec_for, skeleton, text, **sidecar):
@@ -108,3 +109,41 @@ def test_first_bad_row_of_a_large_file_is_located(tmp_path, spec_for, mediapipe2
     with pytest.raises(InputError, match="'x1.5' is not a number") as info:
         read_text(tmp_path, spec_for, mediapipe21, "frame,joint,u,v\n" + "\n".join(rows))
     assert info.value.line == 300_002
+
+
+@pytest.mark.parametrize("text", [
+    ",frame,joint,u,v\n0,0,wrist,1,2\n1,1,index_tip,3,4\n",           # pandas' index column
+    "frame,joint,u,v,,\n0,wrist,1,2,,\n1,index_tip,3,4,,\n",          # a spreadsheet's
+])
+def test_columns_without_a_name_are_ignored(tmp_path, spec_for, mediapipe21, text):
+    _, obs = read_text(tmp_path, spec_for, mediapipe21, text)
+    assert obs.uv.tolist() == [[1.0, 2.0], [3.0, 4.0]]
+    assert obs.joint.tolist() == [0, mediapipe21.index("index_tip")]
+
+
+@pytest.mark.parametrize(("text", "name"), [
+    ("frame;joint;u;v\n0;wrist;1,5;2\n", "semicolons"),
+    ("frame\tjoint\tu\tv\n0\twrist\t1.5\t2\n", "tabs"),
+])
+def test_other_separators_are_refused_with_what_to_save(tmp_path, spec_for, mediapipe21,
+                                                         text, name):
+    with pytest.raises(InputError, match=f"separates its fields with {name}, not ','.*'.' in "
+                       "decimals") as info:
+        read_text(tmp_path, spec_for, mediapipe21, text)
+    assert (info.value.line, info.value.field) == (1, "frame")
+
+
+@pytest.mark.parametrize(("scale", "refused"), [(1.0, True), (640.0, False)])
+def test_a_track_normalised_to_the_image_is_refused_as_not_pixels(tmp_path, write_sidecar,
+                                                                  mediapipe21, scale, refused):
+    track = hand_track(mediapipe21, 4)
+    normalised = track / track.max()                                    # within [0, 1]
+    write_sidecar(tmp_path, "clip")
+    tracks_csv.write(tmp_path / "clip.tracks.csv", normalised * scale, None, mediapipe21)
+    (entry,) = discover(tmp_path).clips
+    if not refused:
+        np.testing.assert_allclose(load_clip(entry).uv, normalised * scale)
+        return
+    with pytest.raises(InputError, match="normalised to the image, not pixels") as info:
+        load_clip(entry)
+    assert info.value.field == "u" and info.value.line > 1

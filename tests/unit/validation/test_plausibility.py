@@ -8,7 +8,12 @@ import pytest
 
 from handdb.hand.skeletons import frame_bone_lengths, load_skeleton
 from handdb.synthetic import synthesize_clip
-from handdb.validation.plausibility import assess, check_joint_order, flexion_angles
+from handdb.validation.plausibility import (
+    assess,
+    check_joint_order,
+    flexion_angles,
+    persistent_frames,
+)
 
 MEDIAPIPE = load_skeleton("mediapipe21")
 
@@ -88,21 +93,59 @@ def test_a_middle_phalanx_longer_than_the_proximal_is_flagged(clip):
     assert any("ring finger's phalanges are out of proportion" in r for r in verdict.reasons)
 
 
-def test_fingers_bent_backwards_are_flagged(clip):
-    xyz = clip.xyz.copy()
+def bent_backwards(xyz, frames):
+    """``xyz`` with the middle finger's PIP bent 100 degrees backwards in ``frames``."""
+    xyz = xyz.copy()
     pip, dip, tip = MEDIAPIPE.indices(["middle_pip", "middle_dip", "middle_tip"])
     mcp = MEDIAPIPE.index("middle_mcp")
     wrist, index, little = MEDIAPIPE.indices(["wrist", "index_mcp", "little_mcp"])
-    normal = np.cross(xyz[:, index] - xyz[:, wrist], xyz[:, little] - xyz[:, wrist])
+    part = xyz[frames]
+    normal = np.cross(part[:, index] - part[:, wrist], part[:, little] - part[:, wrist])
     normal /= np.linalg.norm(normal, axis=-1, keepdims=True)
-    along = (xyz[:, pip] - xyz[:, mcp]) / np.linalg.norm(xyz[:, pip] - xyz[:, mcp], axis=-1,
-                                                          keepdims=True)
+    along = (part[:, pip] - part[:, mcp]) / np.linalg.norm(part[:, pip] - part[:, mcp],
+                                                             axis=-1, keepdims=True)
     backwards = np.cos(np.radians(100)) * along - np.sin(np.radians(100)) * normal
-    xyz[:, dip] = xyz[:, pip] + 25.0 * backwards
-    xyz[:, tip] = xyz[:, dip] + 20.0 * backwards
+    part[:, dip] = part[:, pip] + 25.0 * backwards
+    part[:, tip] = part[:, dip] + 20.0 * backwards
+    xyz[frames] = part
+    return xyz
+
+
+def test_fingers_bent_backwards_are_flagged(clip):
+    xyz = bent_backwards(clip.xyz, slice(None))
     verdict = assess(MEDIAPIPE, "mm", "right", lengths_of(clip), xyz)
     assert any("middle PIP" in reason for reason in verdict.reasons)
     assert verdict.rows[:, 0].all()
+
+
+@pytest.mark.parametrize("start", [0, 4, 8])
+def test_one_frame_beyond_range_is_a_glitch_whose_rows_alone_are_flagged(start):
+    short = synthesize_clip("random", 9, seed=3)
+    xyz = bent_backwards(short.xyz, [start])
+    verdict = assess(MEDIAPIPE, "mm", "right", lengths_of(short), xyz)
+    assert not verdict.flagged, verdict.reasons
+    assert verdict.rows[start].all() and verdict.rows.sum(axis=1).tolist().count(0) == 8
+
+
+@pytest.mark.parametrize("frames", [[0, 1], [4, 5], [7, 8], [1, 3, 5, 7], [0]])
+def test_a_bend_that_holds_or_recurs_is_flagged(frames):
+    short = synthesize_clip("random", 9, seed=3)
+    xyz = bent_backwards(short.xyz, frames)
+    sampling = "images" if frames == [0] else "video"
+    verdict = assess(MEDIAPIPE, "mm", "right", lengths_of(short), xyz, sampling=sampling)
+    assert any("middle PIP" in reason for reason in verdict.reasons)
+    assert verdict.rows[frames].all()
+
+
+def test_a_single_frame_clip_is_judged_by_its_frame_alone(clip):
+    bent = bent_backwards(clip.xyz[:1], [0])
+    lengths = lengths_of(clip)
+    assert assess(MEDIAPIPE, "mm", "right", lengths, bent).flagged
+    assert not assess(MEDIAPIPE, "mm", "right", lengths, clip.xyz[:1]).flagged
+    # repeated: scipy's mirrored running median of one frame reads memory beyond it
+    for frame in (False, True):
+        assert all(persistent_frames(np.array([frame])).tolist() == [frame]
+                   for _ in range(50))
 
 
 def test_a_bone_that_stretches_is_flagged(clip):
