@@ -39,9 +39,9 @@ from typing import TYPE_CHECKING
 import numpy as np
 import trimesh
 
-from handdb.checks import check_hand, mm_per_unit
 from handdb.clip import METERS_PER_UNIT
-from handdb.errors import ParameterError, StageError
+from handdb.errors import ParameterError
+from handdb.export.clip_checks import check_skinned_clip, require_filled
 from handdb.export.mesh import hand_mesh
 from handdb.export.rotations import (
     CAMERA_TO_Y_UP,
@@ -270,22 +270,9 @@ def export_clip_gltf(
     path = Path(path)
     if path.suffix != GLB_SUFFIX:
         raise ParameterError(f"{path}: the suffix must be {GLB_SUFFIX}")
-    mm_per_unit(units)
-    check_hand(hand)
-    if not fps > 0:
-        raise ParameterError(f"fps must be positive, got {fps}")
-    xyz = np.asarray(xyz, dtype=np.float64)
-    if xyz.ndim != 3 or xyz.shape[1:] != (skeleton.n_joints, 3) or len(xyz) == 0:
-        raise ParameterError(f"xyz must be (T, {skeleton.n_joints}, 3) with T > 0, got "
-                             f"{xyz.shape}")
-    bone_lengths = np.asarray(bone_lengths, dtype=np.float64)
-    if bone_lengths.shape != (skeleton.n_joints,):
-        raise ParameterError(
-            f"bone_lengths must be ({skeleton.n_joints},), got {bone_lengths.shape}")
-    missing = ~np.isfinite(xyz).all(axis=(1, 2))
-    if missing.any():
-        raise StageError(f"clip '{clip_id}': {missing.sum()} of {len(xyz)} frames have "
-                         "joints without a 3D position; fill the gaps before exporting")
+    xyz, bone_lengths = check_skinned_clip(skeleton, xyz, bone_lengths, fps=fps, units=units,
+                                           hand=hand)
+    require_filled(xyz, f"clip '{clip_id}'")
     motion = joint_rotations(xyz, skeleton, bone_lengths, keep_lengths=keep_lengths)
     document = build_clip_gltf(clip_id=clip_id, skeleton=skeleton, motion=motion,
                                bone_lengths=bone_lengths, fps=fps, units=units, hand=hand)
