@@ -51,6 +51,11 @@ def check_skinned_clip(skeleton: Skeleton, xyz: np.ndarray, bone_lengths: np.nda
     return positions, lengths
 
 
+def unplaced_frames(xyz: np.ndarray) -> int:
+    """Frames of ``xyz`` ``(T, J, 3)`` with a joint that has no 3D position (NaN)."""
+    return int((~np.isfinite(xyz).all(axis=(1, 2))).sum())
+
+
 def require_filled(xyz: np.ndarray, source: str) -> None:
     """Raise unless every frame of ``xyz`` places every joint, as posing a skeleton needs.
 
@@ -66,7 +71,7 @@ def require_filled(xyz: np.ndarray, source: str) -> None:
     StageError
         If a frame has a joint without a 3D position (fill the gaps first).
     """
-    missing = ~np.isfinite(xyz).all(axis=(1, 2))
-    if missing.any():
-        raise StageError(f"{source}: {missing.sum()} of {len(xyz)} frames have joints "
+    missing = unplaced_frames(xyz)
+    if missing:
+        raise StageError(f"{source}: {missing} of {len(xyz)} frames have joints "
                          "without a 3D position; fill the gaps before exporting")
