@@ -11,23 +11,13 @@ from handdb.hand.skeletons import Skeleton
 
 def check_skinned_clip(skeleton: Skeleton, xyz: np.ndarray, bone_lengths: np.ndarray, *,
                        fps: float, units: str, hand: str) -> tuple[np.ndarray, np.ndarray]:
-    """Check the arguments of a skinned export (USD, glTF) and return its arrays as float64.
+    """Check the arguments of a skinned export and return its arrays as float64.
 
     Parameters
     ----------
-    skeleton
-        Skeleton of ``xyz``.
-    xyz
-        Joint positions, ``(T, J, 3)``, clip units, handdb's camera frame, ``T > 0``; NaN
-        where a joint has no position.
-    bone_lengths
-        ``(J,)`` length of the bone ending at each joint, clip units.
-    fps
-        Frames per second, > 0.
-    units
-        ``mm``, ``cm``, ``m`` or ``in``.
-    hand
-        ``left`` or ``right``.
+    skeleton, xyz, bone_lengths, fps, units, hand
+        As for :func:`handdb.export.usd.export_clip_usd` and
+        :func:`handdb.export.gltf.export_clip_gltf`; ``xyz`` may hold NaN.
 
     Returns
     -------

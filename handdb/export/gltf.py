@@ -144,18 +144,8 @@ def build_clip_gltf(*, clip_id: str, skeleton: Skeleton, motion: JointMotion,
     ----------
     clip_id
         The clip's id: the scene's and the animation's name.
-    skeleton
-        Skeleton of the motion.
-    motion
-        Local joint transforms in handdb's camera frame, ``T`` frames, clip units.
-    bone_lengths
-        ``(J,) float64`` length of the bone ending at each joint, clip units.
-    fps
-        Frames per second.
-    units
-        Clip length unit: ``mm``, ``cm``, ``m`` or ``in``.
-    hand
-        ``left`` or ``right``.
+    skeleton, motion, bone_lengths, fps, units, hand
+        As for :func:`handdb.export.usd.build_clip_stage`.
 
     Returns
     -------
@@ -236,23 +226,8 @@ def export_clip_gltf(
     path
         Output ``.glb`` file; its folder must exist; an existing file is replaced
         atomically.
-    clip_id
-        The clip's id.
-    skeleton
-        Skeleton of ``xyz``.
-    xyz
-        Joint positions, ``(T, J, 3) float64``, clip units, handdb's camera frame, no NaN.
-    bone_lengths
-        ``(J,) float64`` length of the bone ending at each joint, clip units.
-    fps
-        Frames per second, > 0.
-    units
-        ``mm``, ``cm``, ``m`` or ``in``.
-    hand
-        ``left`` or ``right``.
-    keep_lengths
-        ``False`` reproduces ``xyz`` exactly, ``True`` gives every bone its length from
-        ``bone_lengths``.
+    clip_id, skeleton, xyz, bone_lengths, fps, units, hand, keep_lengths
+        As for :func:`handdb.export.usd.export_clip_usd`.
 
     Returns
     -------
