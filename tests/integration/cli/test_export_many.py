@@ -15,7 +15,7 @@ from handdb.export.bvh import depth_first_order
 from handdb.export.placement import at_origin
 from handdb.export.rotations import joint_rotations, motion_positions
 from handdb.export.stored import read_stored_motion
-from handdb.hand.skeletons import frame_bone_lengths, load_skeleton
+from handdb.hand.skeletons import load_skeleton
 from handdb.store.database import Store
 from handdb.store.query import query
 from tests.integration.cli.test_export_cli import write_database
@@ -121,13 +121,10 @@ def test_an_unknown_format_lists_the_choices(database, tmp_path):
 
 
 @pytest.fixture(scope="module")
-def dhg_database(dhg_mm, tmp_path_factory):
+def dhg_database(dhg_mm, dhg_bone_lengths, tmp_path_factory):
     """The real DHG capture stored as a clip, its bones their median measured lengths."""
-    skeleton = load_skeleton("dhg22")
-    child = skeleton.bones[:, 1]
-    lengths = np.zeros(skeleton.n_joints)
-    lengths[child] = np.median(frame_bone_lengths(dhg_mm, skeleton)[:, child], axis=0)
-    motion = SimpleNamespace(skeleton=skeleton, xyz=dhg_mm, bone_lengths=lengths)
+    motion = SimpleNamespace(skeleton=load_skeleton("dhg22"), xyz=dhg_mm,
+                             bone_lengths=dhg_bone_lengths)
     return write_database(tmp_path_factory.mktemp("dhg") / "db", motion, clip_id="dhg")
 
 
