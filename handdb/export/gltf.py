@@ -30,8 +30,6 @@ unit length in float32.
 
 from __future__ import annotations
 
-import os
-import tempfile
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -51,6 +49,7 @@ from handdb.export.rotations import (
     turn_root,
     world_transforms,
 )
+from handdb.export.staging import staged_file
 from handdb.hand.skeletons import Skeleton
 
 if TYPE_CHECKING:
@@ -251,9 +250,7 @@ def export_clip_gltf(
     motion = joint_rotations(xyz, skeleton, bone_lengths, keep_lengths=keep_lengths)
     document = build_clip_gltf(clip_id=clip_id, skeleton=skeleton, motion=motion,
                                bone_lengths=bone_lengths, fps=fps, units=units, hand=hand)
-    with tempfile.TemporaryDirectory(dir=path.parent, prefix=".gltf-export-") as tmp:
-        written = Path(tmp) / path.name
+    with staged_file(path, ".gltf-export-") as written:
         document.save_binary(str(written))
-        os.replace(written, path)
     return path
 

@@ -31,9 +31,7 @@ measured directions). The bind and rest pose is the average hand of
 
 from __future__ import annotations
 
-import os
 import re
-import tempfile
 import threading
 from pathlib import Path
 
@@ -53,6 +51,7 @@ from handdb.export.rotations import (
     turn_root,
     world_transforms,
 )
+from handdb.export.staging import staged_file
 from handdb.hand.skeletons import Skeleton
 
 #: USD loads its plugins when a process makes its first stage, and two threads doing that
@@ -245,18 +244,14 @@ def build_clip_stage(
 
 def _write_atomically(stage: Usd.Stage, path: Path) -> None:
     """Write ``stage`` to ``path`` (format from its suffix) via a file renamed into place."""
-    with tempfile.TemporaryDirectory(dir=path.parent, prefix=".usd-export-") as tmp:
+    with staged_file(path, ".usd-export-") as written:
         if path.suffix == USDZ_SUFFIX:
-            layer_file = Path(tmp) / f"{path.stem}.usdc"
+            layer_file = written.with_suffix(".usdc")
             stage.GetRootLayer().Export(str(layer_file))
-            written = Path(tmp) / path.name
             if not UsdUtils.CreateNewUsdzPackage(Sdf.AssetPath(str(layer_file)), str(written)):
                 raise StageError(f"usd-core could not package {path}")
-        else:
-            written = Path(tmp) / path.name
-            if not stage.GetRootLayer().Export(str(written)):
-                raise StageError(f"usd-core could not write {path}")
-        os.replace(written, path)
+        elif not stage.GetRootLayer().Export(str(written)):
+            raise StageError(f"usd-core could not write {path}")
 
 
 def export_clip_usd(
