@@ -34,6 +34,13 @@ def mm_per_unit(units: str) -> float:
     return METERS_PER_UNIT[units] * 1000.0
 
 
+def check_fps(fps: float) -> float:
+    """Return ``fps`` (frames per second) if it is positive; raise :class:`ParameterError`."""
+    if not fps > 0:
+        raise ParameterError(f"fps must be positive, got {fps}")
+    return fps
+
+
 def as_points(values: np.ndarray, n_joints: int, dims: int, name: str) -> np.ndarray:
     """``values`` as a ``(T, J, D) float64`` array of points, checked.
 

@@ -49,6 +49,15 @@ def dhg_mm(dhg_world) -> np.ndarray:
 
 
 @pytest.fixture(scope="session")
+def dhg_bone_lengths(dhg_mm) -> np.ndarray:
+    """The real DHG capture's bones at their median measured lengths, ``(J,)`` mm, 0 at the root."""
+    from handdb.hand.skeletons import load_skeleton
+    from tests.support.real_data import median_bone_lengths
+
+    return np.nan_to_num(median_bone_lengths(dhg_mm, load_skeleton("dhg22")))
+
+
+@pytest.fixture(scope="session")
 def real_tools() -> Path:
     """The folder of real tool outputs in ../shared/data/real-tools; skips when absent."""
     if not REAL_TOOLS.is_dir():

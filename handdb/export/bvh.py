@@ -35,9 +35,9 @@ from pathlib import Path
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from handdb.checks import mm_per_unit
+from handdb.checks import check_fps, mm_per_unit
 from handdb.clip import METERS_PER_UNIT
-from handdb.errors import ParameterError, StageError
+from handdb.export.clip_checks import require_filled
 from handdb.export.rotations import (
     CAMERA_TO_Y_UP,
     JointMotion,
@@ -178,14 +178,10 @@ def export_clip_bvh(
     """
     path = Path(path)
     mm_per_unit(units)
-    if not fps > 0:
-        raise ParameterError(f"fps must be positive, got {fps}")
+    check_fps(fps)
     bone_lengths = np.asarray(bone_lengths, dtype=np.float64)
     if rotations is None:
-        missing = ~np.isfinite(xyz).all(axis=(1, 2))
-        if missing.any():
-            raise StageError(f"{path}: {missing.sum()} of {len(xyz)} frames have joints "
-                             "without a 3D position; fill the gaps before exporting")
+        require_filled(xyz, str(path))
         rotations = joint_rotations(xyz, skeleton, bone_lengths)
     metres = METERS_PER_UNIT[units]
     offsets = metres * rest_pose(skeleton, bone_lengths).translations[0]

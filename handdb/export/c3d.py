@@ -31,13 +31,8 @@ def export_clip_c3d(path: str | Path, *, skeleton: Skeleton, xyz: np.ndarray, fp
         Output ``.c3d`` file; its folder must exist.
     skeleton
         Skeleton of ``xyz``: the point labels and their order.
-    xyz
-        ``(T, J, 3) float64`` joint positions, clip units, handdb's camera frame; NaN where
-        a joint has no position.
-    fps
-        Frames per second, > 0.
-    units
-        ``mm``, ``cm``, ``m`` or ``in``.
+    xyz, fps, units
+        As for :func:`handdb.export.markers.y_up_markers`, which checks them.
 
     Returns
     -------
@@ -47,7 +42,7 @@ def export_clip_c3d(path: str | Path, *, skeleton: Skeleton, xyz: np.ndarray, fp
     Raises
     ------
     ParameterError
-        On a non-positive fps, an unknown unit or ``xyz`` not shaped ``(T, J, 3)``.
+        As :func:`~handdb.export.markers.y_up_markers`.
     """
     path = Path(path)
     c3d_format.write(path, y_up_markers(xyz, skeleton, fps, units), skeleton, units=units,

@@ -30,8 +30,6 @@ unit length in float32.
 
 from __future__ import annotations
 
-import os
-import tempfile
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -39,9 +37,9 @@ from typing import TYPE_CHECKING
 import numpy as np
 import trimesh
 
-from handdb.checks import check_hand, mm_per_unit
 from handdb.clip import METERS_PER_UNIT
-from handdb.errors import ParameterError, StageError
+from handdb.errors import ParameterError
+from handdb.export.clip_checks import check_skinned_clip, require_filled
 from handdb.export.mesh import hand_mesh
 from handdb.export.rotations import (
     CAMERA_TO_Y_UP,
@@ -51,6 +49,7 @@ from handdb.export.rotations import (
     turn_root,
     world_transforms,
 )
+from handdb.export.staging import staged_file
 from handdb.hand.skeletons import Skeleton
 
 if TYPE_CHECKING:
@@ -144,18 +143,8 @@ def build_clip_gltf(*, clip_id: str, skeleton: Skeleton, motion: JointMotion,
     ----------
     clip_id
         The clip's id: the scene's and the animation's name.
-    skeleton
-        Skeleton of the motion.
-    motion
-        Local joint transforms in handdb's camera frame, ``T`` frames, clip units.
-    bone_lengths
-        ``(J,) float64`` length of the bone ending at each joint, clip units.
-    fps
-        Frames per second.
-    units
-        Clip length unit: ``mm``, ``cm``, ``m`` or ``in``.
-    hand
-        ``left`` or ``right``.
+    skeleton, motion, bone_lengths, fps, units, hand
+        As for :func:`handdb.export.usd.build_clip_stage`.
 
     Returns
     -------
@@ -236,23 +225,8 @@ def export_clip_gltf(
     path
         Output ``.glb`` file; its folder must exist; an existing file is replaced
         atomically.
-    clip_id
-        The clip's id.
-    skeleton
-        Skeleton of ``xyz``.
-    xyz
-        Joint positions, ``(T, J, 3) float64``, clip units, handdb's camera frame, no NaN.
-    bone_lengths
-        ``(J,) float64`` length of the bone ending at each joint, clip units.
-    fps
-        Frames per second, > 0.
-    units
-        ``mm``, ``cm``, ``m`` or ``in``.
-    hand
-        ``left`` or ``right``.
-    keep_lengths
-        ``False`` reproduces ``xyz`` exactly, ``True`` gives every bone its length from
-        ``bone_lengths``.
+    clip_id, skeleton, xyz, bone_lengths, fps, units, hand, keep_lengths
+        As for :func:`handdb.export.usd.export_clip_usd`.
 
     Returns
     -------
@@ -270,28 +244,13 @@ def export_clip_gltf(
     path = Path(path)
     if path.suffix != GLB_SUFFIX:
         raise ParameterError(f"{path}: the suffix must be {GLB_SUFFIX}")
-    mm_per_unit(units)
-    check_hand(hand)
-    if not fps > 0:
-        raise ParameterError(f"fps must be positive, got {fps}")
-    xyz = np.asarray(xyz, dtype=np.float64)
-    if xyz.ndim != 3 or xyz.shape[1:] != (skeleton.n_joints, 3) or len(xyz) == 0:
-        raise ParameterError(f"xyz must be (T, {skeleton.n_joints}, 3) with T > 0, got "
-                             f"{xyz.shape}")
-    bone_lengths = np.asarray(bone_lengths, dtype=np.float64)
-    if bone_lengths.shape != (skeleton.n_joints,):
-        raise ParameterError(
-            f"bone_lengths must be ({skeleton.n_joints},), got {bone_lengths.shape}")
-    missing = ~np.isfinite(xyz).all(axis=(1, 2))
-    if missing.any():
-        raise StageError(f"clip '{clip_id}': {missing.sum()} of {len(xyz)} frames have "
-                         "joints without a 3D position; fill the gaps before exporting")
+    xyz, bone_lengths = check_skinned_clip(skeleton, xyz, bone_lengths, fps=fps, units=units,
+                                           hand=hand)
+    require_filled(xyz, f"clip '{clip_id}'")
     motion = joint_rotations(xyz, skeleton, bone_lengths, keep_lengths=keep_lengths)
     document = build_clip_gltf(clip_id=clip_id, skeleton=skeleton, motion=motion,
                                bone_lengths=bone_lengths, fps=fps, units=units, hand=hand)
-    with tempfile.TemporaryDirectory(dir=path.parent, prefix=".gltf-export-") as tmp:
-        written = Path(tmp) / path.name
+    with staged_file(path, ".gltf-export-") as written:
         document.save_binary(str(written))
-        os.replace(written, path)
     return path
 

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from handdb.checks import mm_per_unit
+from handdb.checks import check_fps, mm_per_unit
 from handdb.errors import ParameterError
 from handdb.export.rotations import CAMERA_TO_Y_UP
 from handdb.hand.skeletons import Skeleton
@@ -37,8 +37,7 @@ def y_up_markers(xyz: np.ndarray, skeleton: Skeleton, fps: float, units: str) ->
         On a non-positive fps, an unknown unit or ``xyz`` not shaped ``(T, J, 3)``.
     """
     mm_per_unit(units)
-    if not fps > 0:
-        raise ParameterError(f"fps must be positive, got {fps}")
+    check_fps(fps)
     xyz = np.asarray(xyz, dtype=np.float64)
     if xyz.ndim != 3 or xyz.shape[1:] != (skeleton.n_joints, 3):
         raise ParameterError(f"xyz must be (T, {skeleton.n_joints}, 3), got {xyz.shape}")

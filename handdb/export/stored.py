@@ -18,6 +18,7 @@ import numpy as np
 
 from handdb.errors import ParameterError, StoreError
 from handdb.export import placement
+from handdb.export.clip_checks import unplaced_frames
 from handdb.export.formats import FORMATS, ExportFormat, ExportOptions, format_for_suffix
 from handdb.hand.skeletons import Skeleton, bone_length_array, load_skeleton
 from handdb.store import tables
@@ -50,7 +51,7 @@ class StoredMotion:
     @property
     def unplaced_frames(self) -> int:
         """Frames with a joint that has no 3D position (a posed format cannot take them)."""
-        return int((~np.isfinite(self.xyz).all(axis=(1, 2))).sum())
+        return unplaced_frames(self.xyz)
 
 
 def _read(store: Store, table: str, clip_id: str):

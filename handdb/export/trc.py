@@ -106,13 +106,8 @@ def export_clip_trc(path: str | Path, *, skeleton: Skeleton, xyz: np.ndarray, fp
         Output ``.trc`` file; its folder must exist.
     skeleton
         Skeleton of ``xyz``: the marker names and their order.
-    xyz
-        ``(T, J, 3) float64`` joint positions, clip units, handdb's camera frame; NaN where
-        a joint has no position.
-    fps
-        Frames per second, > 0.
-    units
-        ``mm``, ``cm``, ``m`` or ``in``.
+    xyz, fps, units
+        As for :func:`handdb.export.markers.y_up_markers`, which checks them.
 
     Returns
     -------
@@ -122,7 +117,7 @@ def export_clip_trc(path: str | Path, *, skeleton: Skeleton, xyz: np.ndarray, fp
     Raises
     ------
     ParameterError
-        On a non-positive fps, an unknown unit or ``xyz`` not shaped ``(T, J, 3)``.
+        As :func:`~handdb.export.markers.y_up_markers`.
     """
     path = Path(path)
     y_up = y_up_markers(xyz, skeleton, fps, units)

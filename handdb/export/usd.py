@@ -31,9 +31,7 @@ measured directions). The bind and rest pose is the average hand of
 
 from __future__ import annotations
 
-import os
 import re
-import tempfile
 import threading
 from pathlib import Path
 
@@ -41,9 +39,9 @@ import numpy as np
 from pxr import Gf, Sdf, Usd, UsdGeom, UsdSkel, UsdUtils, Vt
 from scipy.spatial.transform import Rotation
 
-from handdb.checks import check_hand, mm_per_unit
 from handdb.clip import METERS_PER_UNIT
 from handdb.errors import ParameterError, StageError
+from handdb.export.clip_checks import check_skinned_clip, require_filled
 from handdb.export.mesh import INFLUENCES, hand_mesh
 from handdb.export.rotations import (
     CAMERA_TO_Y_UP,
@@ -53,6 +51,7 @@ from handdb.export.rotations import (
     turn_root,
     world_transforms,
 )
+from handdb.export.staging import staged_file
 from handdb.hand.skeletons import Skeleton
 
 #: USD loads its plugins when a process makes its first stage, and two threads doing that
@@ -245,18 +244,14 @@ def build_clip_stage(
 
 def _write_atomically(stage: Usd.Stage, path: Path) -> None:
     """Write ``stage`` to ``path`` (format from its suffix) via a file renamed into place."""
-    with tempfile.TemporaryDirectory(dir=path.parent, prefix=".usd-export-") as tmp:
+    with staged_file(path, ".usd-export-") as written:
         if path.suffix == USDZ_SUFFIX:
-            layer_file = Path(tmp) / f"{path.stem}.usdc"
+            layer_file = written.with_suffix(".usdc")
             stage.GetRootLayer().Export(str(layer_file))
-            written = Path(tmp) / path.name
             if not UsdUtils.CreateNewUsdzPackage(Sdf.AssetPath(str(layer_file)), str(written)):
                 raise StageError(f"usd-core could not package {path}")
-        else:
-            written = Path(tmp) / path.name
-            if not stage.GetRootLayer().Export(str(written)):
-                raise StageError(f"usd-core could not write {path}")
-        os.replace(written, path)
+        elif not stage.GetRootLayer().Export(str(written)):
+            raise StageError(f"usd-core could not write {path}")
 
 
 def export_clip_usd(
@@ -306,7 +301,7 @@ def export_clip_usd(
 
     Raises
     ------
-    ValueError
+    ParameterError
         On an unknown suffix, unit or hand, a non-positive fps, or arrays whose shapes do
         not match ``skeleton``.
     StageError
@@ -315,24 +310,12 @@ def export_clip_usd(
     path = Path(path)
     if path.suffix not in (*LAYER_SUFFIXES, USDZ_SUFFIX):
         raise ParameterError(f"{path}: the suffix must be one of {(*LAYER_SUFFIXES, USDZ_SUFFIX)}")
-    mm_per_unit(units)
-    check_hand(hand)
-    if not fps > 0:
-        raise ParameterError(f"fps must be positive, got {fps}")
-    xyz = np.asarray(xyz, dtype=np.float64)
-    if xyz.ndim != 3 or xyz.shape[1:] != (skeleton.n_joints, 3) or len(xyz) == 0:
-        raise ValueError(f"xyz must be (T, {skeleton.n_joints}, 3) with T > 0, got {xyz.shape}")
-    if np.shape(bone_lengths) != (skeleton.n_joints,):
-        raise ValueError(
-            f"bone_lengths must be ({skeleton.n_joints},), got {np.shape(bone_lengths)}")
+    xyz, bone_lengths = check_skinned_clip(skeleton, xyz, bone_lengths, fps=fps, units=units,
+                                           hand=hand)
     if rotations is None:
-        missing = ~np.isfinite(xyz).all(axis=(1, 2))
-        if missing.any():
-            raise StageError(f"clip '{clip_id}': {missing.sum()} of {len(xyz)} frames have "
-                             "joints without a 3D position; fill the gaps before exporting")
+        require_filled(xyz, f"clip '{clip_id}'")
         rotations = joint_rotations(xyz, skeleton, bone_lengths, keep_lengths=keep_lengths)
     stage = build_clip_stage(clip_id=clip_id, skeleton=skeleton, motion=rotations,
-                             bone_lengths=np.asarray(bone_lengths, dtype=np.float64),
-                             fps=fps, units=units, hand=hand)
+                             bone_lengths=bone_lengths, fps=fps, units=units, hand=hand)
     _write_atomically(stage, path)
     return path

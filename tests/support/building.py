@@ -2,9 +2,13 @@
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 
 from handdb.build import BuildOptions, BuildSummary, run_build
+
+#: Factor on every bone length that makes a clip no hand could produce (flagged by a build).
+GIANT_FACTOR = 3.0
 
 
 def run(inbox: str | Path, db: str, *, runner: str = "thread", workers: int = 2,
@@ -38,3 +42,11 @@ def build_demo_clips(root: Path, clip_ids: tuple[str, ...], options: BuildOption
     summary = build_in_process(inbox, db, options)
     assert sorted(summary.processed) == sorted(clip_ids)
     return db
+
+
+def scale_bones(inbox: Path, clip_id: str, factor: float) -> None:
+    """Multiply every bone length in the sidecar of ``clip_id`` in ``inbox`` by ``factor``."""
+    sidecar = inbox / f"{clip_id}.clip.json"
+    doc = json.loads(sidecar.read_text())
+    doc["bone_lengths"] = {bone: factor * length for bone, length in doc["bone_lengths"].items()}
+    sidecar.write_text(json.dumps(doc))

@@ -132,6 +132,19 @@ def perturbed_hand(model: HandModel, seed: int) -> HandModel:
     return model.with_geometry(lengths, directions)
 
 
+def noisy_markers(truth: np.ndarray, *, noise: float, missing_share: float, seed: int
+                  ) -> np.ndarray:
+    """``(T, J, 3)`` markers: ``truth`` plus Gaussian noise, a share of them missing (NaN).
+
+    ``noise`` is the noise's standard deviation in ``truth``'s unit; each marker is missing
+    with probability ``missing_share``; both drawn from ``seed``.
+    """
+    rng = np.random.default_rng(seed)
+    markers = truth + rng.normal(0.0, noise, truth.shape)
+    markers[rng.random(truth.shape[:2]) < missing_share] = np.nan
+    return markers
+
+
 def smooth_poses(model: HandModel, n_frames: int, seed: int) -> np.ndarray:
     """``(n_frames, 33)`` poses moving smoothly inside the joint limits (mm, rad)."""
     rng = np.random.default_rng(seed)

@@ -20,7 +20,7 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from handdb.clip import Camera
-from handdb.hand.skeletons import FINGERS, Skeleton, load_skeleton
+from handdb.hand.skeletons import FINGERS, Skeleton, frame_bone_lengths, load_skeleton
 
 #: InterHand2.6M's 21 joints of one hand, in its order (tip to base per finger, wrist last).
 INTERHAND_ORDER = (
@@ -82,10 +82,7 @@ def load_interhand(path: Path) -> list[Capture]:
 
 def median_bone_lengths(xyz: np.ndarray, skeleton: Skeleton) -> np.ndarray:
     """Each bone's median length over the frames, ``(J,)`` (NaN at the root)."""
-    parent, child = skeleton.bones.T
-    lengths = np.full(skeleton.n_joints, np.nan)
-    lengths[child] = np.median(np.linalg.norm(xyz[:, child] - xyz[:, parent], axis=-1), axis=0)
-    return lengths
+    return np.median(frame_bone_lengths(xyz, skeleton), axis=0)
 
 
 def view_rotations(n_views: int, seed: int) -> np.ndarray:

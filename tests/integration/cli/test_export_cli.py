@@ -7,11 +7,11 @@ from typer.testing import CliRunner
 
 from handdb.cli.export import app
 from handdb.export.placement import at_origin
-from handdb.export.rotations import CAMERA_TO_Y_UP
 from handdb.export.stored import read_stored_motion
 from handdb.hand.skeletons import load_skeleton
 from handdb.store import tables
 from handdb.store.database import Store
+from tests.support.axes import y_up
 from tests.support.motions import make_hinge_motion
 from tests.support.usd_reading import joint_world_positions, open_skeleton
 from tests.unit.export.test_bvh import bvh_positions, parse_bvh
@@ -91,10 +91,6 @@ def test_export_usd_command(database, tmp_path, suffix):
     assert stage_xyz[..., 1].min() == pytest.approx(0.0, abs=1e-3)
 
 
-def y_up(xyz):
-    return CAMERA_TO_Y_UP.apply(xyz.reshape(-1, 3)).reshape(xyz.shape)
-
-
 def test_export_usd_in_camera_coordinates(database, tmp_path):
     db, motion = database
     out = tmp_path / "clip.usda"
@@ -114,7 +110,7 @@ def test_export_bvh_command(database, tmp_path):
     joints, _, values = parse_bvh(out.read_text())
     tip = at_origin(motion.xyz, motion.skeleton)[:, motion.skeleton.index("index_tip")]
     np.testing.assert_allclose(bvh_positions(joints, values)["index_tip"],
-                               1e-3 * CAMERA_TO_Y_UP.apply(tip), atol=1e-6)   # metres
+                               1e-3 * y_up(tip), atol=1e-6)   # metres
 
 
 @pytest.mark.parametrize("keep_lengths", [False, True])

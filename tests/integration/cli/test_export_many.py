@@ -13,12 +13,13 @@ from handdb.cli import app
 from handdb.export import FORMATS
 from handdb.export.bvh import depth_first_order
 from handdb.export.placement import at_origin
-from handdb.export.rotations import CAMERA_TO_Y_UP, joint_rotations, motion_positions
+from handdb.export.rotations import joint_rotations, motion_positions
 from handdb.export.stored import read_stored_motion
-from handdb.hand.skeletons import frame_bone_lengths, load_skeleton
+from handdb.hand.skeletons import load_skeleton
 from handdb.store.database import Store
 from handdb.store.query import query
 from tests.integration.cli.test_export_cli import write_database
+from tests.support.axes import y_up
 from tests.support.gltf_reading import open_gltf
 from tests.support.motions import make_hinge_motion
 from tests.support.usd_reading import joint_world_positions, open_skeleton
@@ -78,7 +79,7 @@ def test_named_clips_only_and_in_their_order(database, tmp_path):
     assert result.exit_code == 0, result.output
     assert result.stdout.split() == [str(tmp_path / "bravo.c3d"), str(tmp_path / "gappy.c3d")]
     xyz = read_with_c3d_package(tmp_path / "bravo.c3d")["xyz"]
-    expected = CAMERA_TO_Y_UP.apply(motions["bravo"].reshape(-1, 3)).reshape(xyz.shape)
+    expected = y_up(motions["bravo"])
     np.testing.assert_allclose(xyz, expected, rtol=0, atol=FLOAT32_MM)
 
 
@@ -120,13 +121,10 @@ def test_an_unknown_format_lists_the_choices(database, tmp_path):
 
 
 @pytest.fixture(scope="module")
-def dhg_database(dhg_mm, tmp_path_factory):
+def dhg_database(dhg_mm, dhg_bone_lengths, tmp_path_factory):
     """The real DHG capture stored as a clip, its bones their median measured lengths."""
-    skeleton = load_skeleton("dhg22")
-    child = skeleton.bones[:, 1]
-    lengths = np.zeros(skeleton.n_joints)
-    lengths[child] = np.median(frame_bone_lengths(dhg_mm, skeleton)[:, child], axis=0)
-    motion = SimpleNamespace(skeleton=skeleton, xyz=dhg_mm, bone_lengths=lengths)
+    motion = SimpleNamespace(skeleton=load_skeleton("dhg22"), xyz=dhg_mm,
+                             bone_lengths=dhg_bone_lengths)
     return write_database(tmp_path_factory.mktemp("dhg") / "db", motion, clip_id="dhg")
 
 
@@ -175,10 +173,6 @@ def test_real_capture_exports_in_every_format(dhg_database, dhg_mm, tmp_path, na
                                    atol=1e-3)
 
 
-def y_up(xyz):
-    return CAMERA_TO_Y_UP.apply(xyz.reshape(-1, 3)).reshape(xyz.shape)
-
-
 @pytest.mark.parametrize(("flag", "name"), [("--camera-frame", "glb"), ("--at-origin", "trc")])
 def test_the_placement_flag_overrides_the_formats_default(database, tmp_path, flag, name):
     db, motions = database
@@ -214,7 +208,7 @@ def test_a_built_database_exports_every_clip_from_the_command_line(demo_db, tmp_
         trc = read_trc(tmp_path / "trc" / f"{clip_id}.trc")
         xyz = np.full(trc["xyz"].shape, np.nan)
         xyz[rows["frame"], rows["joint_index"]] = np.column_stack([rows[a] for a in "xyz"])
-        expected = CAMERA_TO_Y_UP.apply(xyz.reshape(-1, 3)).reshape(xyz.shape)
+        expected = y_up(xyz)
         np.testing.assert_allclose(trc["xyz"], expected, atol=1e-6)
         skeleton = load_skeleton(query(demo_db, "SELECT skeleton FROM clips WHERE clip_id = "
                                        f"'{clip_id}'").column(0)[0].as_py())

@@ -1,6 +1,5 @@
 """How a build and its clips are worded for an orchestrator's run page, on real builds."""
 
-import json
 from dataclasses import replace
 
 from handdb.build import BuildContext, BuildOptions, build_in_process, plan_build, run_clip
@@ -13,6 +12,7 @@ from handdb.build.describe import (
     stages_run,
 )
 from handdb.store import query
+from tests.support.building import GIANT_FACTOR, scale_bones
 
 OPTIONS = BuildOptions(export_usd=False, gap_fill="linear")
 
@@ -29,10 +29,7 @@ def test_each_clip_line_says_what_the_build_did_with_it(tmp_path, write_clip):
     inbox.mkdir()
     write_clip(inbox, "fine", seed=1)
     write_clip(inbox, "giant", seed=2)
-    sidecar = inbox / "giant.clip.json"
-    doc = json.loads(sidecar.read_text())
-    doc["bone_lengths"] = {bone: 3.0 * length for bone, length in doc["bone_lengths"].items()}
-    sidecar.write_text(json.dumps(doc))
+    scale_bones(inbox, "giant", GIANT_FACTOR)
     spoil_value(write_clip(inbox, "spoilt", seed=3))
     (inbox / "lost.tracks.csv").write_text("frame,joint,u,v\n0,wrist,1,2\n")
 

@@ -4,6 +4,7 @@ import json
 
 from handdb.build import BuildOptions, build_in_process, summary_markdown
 from handdb.store import query
+from tests.support.building import GIANT_FACTOR, scale_bones
 
 
 def test_an_implausible_clip_is_stored_flagged_and_reported(tmp_path, write_clip):
@@ -11,10 +12,7 @@ def test_an_implausible_clip_is_stored_flagged_and_reported(tmp_path, write_clip
     inbox.mkdir()
     write_clip(inbox, "fine", seed=1)
     write_clip(inbox, "giant", seed=2)
-    sidecar = inbox / "giant.clip.json"
-    doc = json.loads(sidecar.read_text())
-    doc["bone_lengths"] = {bone: 3.0 * length for bone, length in doc["bone_lengths"].items()}
-    sidecar.write_text(json.dumps(doc))
+    scale_bones(inbox, "giant", GIANT_FACTOR)
     db = str(tmp_path / "db")
     summary = build_in_process(inbox, db, BuildOptions(export_usd=False))
     assert sorted(summary.processed) == ["fine", "giant"]

@@ -6,19 +6,15 @@ import c3d
 import numpy as np
 
 from handdb.export.c3d import export_clip_c3d
-from handdb.export.rotations import CAMERA_TO_Y_UP
 from handdb.hand.skeletons import load_skeleton
 from handdb.ingest import c3d as c3d_format
 from handdb.markers.tables import dense_markers
+from tests.support.axes import y_up
 from tests.support.motions import make_hinge_motion
 from tests.unit.ingest.test_markers_csv import marker_spec
 
 #: float32 coordinates of a hand (under 1 m from the origin) in mm: 2**-24 * 1000 * 2.
 FLOAT32_MM = 1.2e-4
-
-
-def y_up(xyz):
-    return CAMERA_TO_Y_UP.apply(xyz.reshape(-1, 3)).reshape(xyz.shape)
 
 
 def read_with_c3d_package(path):

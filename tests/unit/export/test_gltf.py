@@ -6,7 +6,7 @@ import pytest
 from handdb.errors import ParameterError, StageError
 from handdb.export.gltf import export_clip_gltf
 from handdb.export.rotations import CAMERA_TO_Y_UP, joint_rotations, rest_pose, world_transforms
-from handdb.hand.skeletons import frame_bone_lengths, load_skeleton
+from handdb.hand.skeletons import load_skeleton
 from tests.support.gltf_reading import open_gltf
 from tests.support.motions import make_hinge_motion
 
@@ -25,15 +25,12 @@ def export(path, motion, **kwargs):
 
 
 @pytest.fixture(scope="module")
-def dhg_clip(dhg_mm, tmp_path_factory):
+def dhg_clip(dhg_mm, dhg_bone_lengths, tmp_path_factory):
     skeleton = load_skeleton("dhg22")
-    child = skeleton.bones[:, 1]
-    lengths = np.zeros(skeleton.n_joints)
-    lengths[child] = np.median(frame_bone_lengths(dhg_mm, skeleton)[:, child], axis=0)
     path = export_clip_gltf(tmp_path_factory.mktemp("gltf") / "dhg.glb", clip_id="dhg",
-                            skeleton=skeleton, xyz=dhg_mm, bone_lengths=lengths, fps=30.0,
-                            units="mm", hand="right")
-    return open_gltf(path), skeleton, lengths
+                            skeleton=skeleton, xyz=dhg_mm, bone_lengths=dhg_bone_lengths,
+                            fps=30.0, units="mm", hand="right")
+    return open_gltf(path), skeleton, dhg_bone_lengths
 
 
 def test_real_capture_structure(dhg_clip):

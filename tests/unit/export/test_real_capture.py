@@ -5,9 +5,10 @@ import numpy as np
 import pytest
 
 from handdb.export.mesh import hand_mesh, posed_vertices
-from handdb.export.rotations import CAMERA_TO_Y_UP, joint_rotations, motion_positions
+from handdb.export.rotations import joint_rotations, motion_positions
 from handdb.export.usd import export_clip_usd
 from handdb.hand.skeletons import load_skeleton
+from tests.support.axes import y_up
 from tests.support.usd_reading import joint_world_positions, open_skeleton, validation_errors
 
 
@@ -47,6 +48,6 @@ def test_noisy_capture_exports_valid_usd(capture, tmp_path, keep_lengths):
     rigid = motion_positions(joint_rotations(xyz, skeleton, lengths), skeleton)
     expected = rigid if keep_lengths else xyz
     stage_xyz = joint_world_positions(opened, len(xyz))
-    expected = CAMERA_TO_Y_UP.apply(expected.reshape(-1, 3)).reshape(xyz.shape)
+    expected = y_up(expected)
     assert np.abs(stage_xyz - expected).max() < 1e-4 * lengths[lengths > 0].min()
     assert np.isfinite(posed_vertices(hand_mesh(skeleton, lengths), xyz, skeleton, lengths)).all()

@@ -5,9 +5,9 @@ import pandas as pd
 import pytest
 
 from handdb.errors import ParameterError
-from handdb.export.rotations import CAMERA_TO_Y_UP
 from handdb.export.trc import export_clip_trc
 from handdb.hand.skeletons import load_skeleton
+from tests.support.axes import y_up
 from tests.support.motions import make_hinge_motion
 
 
@@ -21,10 +21,6 @@ def read_trc(path):
     values = data.iloc[:, 2:].to_numpy(dtype=float).reshape(len(data), len(names), 3)
     return {"file_type": lines[0].split("\t"), "fields": fields, "names": names, "axes": axes,
             "frame": data[0].to_numpy(), "time": data[1].to_numpy(), "xyz": values}
-
-
-def y_up(xyz):
-    return CAMERA_TO_Y_UP.apply(xyz.reshape(-1, 3)).reshape(xyz.shape)
 
 
 def test_real_capture_reads_back_in_mm(tmp_path, dhg_mm):

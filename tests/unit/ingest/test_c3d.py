@@ -19,15 +19,20 @@ def test_c3d_round_trip_converts_units(tmp_path):
     assert match_format(path)[0].name == "c3d"
 
 
-def write_labelled(path, labels, n_frames=3, units="mm"):
-    writer = c3d.Writer(point_rate=120.0, point_units=units)
-    writer.set_point_labels(labels)
-    frames = np.zeros((n_frames, len(labels), 5), dtype=np.float32)
-    frames[..., :3] = np.arange(len(labels) * 3).reshape(len(labels), 3)
+def save_counted_points(writer, path, n_points, n_frames):
+    """Save ``writer`` at ``path`` with ``n_frames`` frames of points at 0, 1, 2, ... (x y z)."""
+    frames = np.zeros((n_frames, n_points, 5), dtype=np.float32)
+    frames[..., :3] = np.arange(n_points * 3).reshape(n_points, 3)
     writer.add_frames([(frame, np.zeros((0, 0), dtype=np.float32)) for frame in frames])
     with pytest.warns(UserWarning), path.open("wb") as handle:
         writer.write(handle)
     return path
+
+
+def write_labelled(path, labels, n_frames=3, units="mm"):
+    writer = c3d.Writer(point_rate=120.0, point_units=units)
+    writer.set_point_labels(labels)
+    return save_counted_points(writer, path, len(labels), n_frames)
 
 
 @pytest.mark.parametrize("joint_map", [{"RWRA": "wrist", "STERNUM": None},
@@ -104,12 +109,7 @@ def write_with_rotations(path, labels, n_frames=4):
     group.add("DATA_START", "first block of the rotations", 2, "<H", 40)
     group.add("RATE", "rotations per second", 4, "<f", 120.0)
     group.add("RATIO", "rotations per point frame", 2, "<H", 1)
-    frames = np.zeros((n_frames, len(labels), 5), dtype=np.float32)
-    frames[..., :3] = np.arange(len(labels) * 3).reshape(len(labels), 3)
-    writer.add_frames([(frame, np.zeros((0, 0), dtype=np.float32)) for frame in frames])
-    with pytest.warns(UserWarning), path.open("wb") as handle:
-        writer.write(handle)
-    return path
+    return save_counted_points(writer, path, len(labels), n_frames)
 
 
 def test_rotations_beside_the_points_are_ignored(tmp_path):

@@ -11,16 +11,14 @@ from handdb.markers.calibration import (
     select_frames,
 )
 from handdb.store import tables
-from tests.support.motions import smooth_poses
+from tests.support.motions import noisy_markers, smooth_poses
 
 
 @pytest.fixture(scope="module")
 def capture(true_model):
     poses = smooth_poses(true_model, 80, seed=21)
     truth = forward_kinematics(true_model, poses)
-    rng = np.random.default_rng(8)
-    markers = truth + rng.normal(0.0, 0.5, truth.shape)
-    markers[rng.random(truth.shape[:2]) < 0.15] = np.nan
+    markers = noisy_markers(truth, noise=0.5, missing_share=0.15, seed=8)
     return markers
 
 

@@ -16,7 +16,7 @@ from handdb.markers.solve import (
     refine_poses,
     track,
 )
-from tests.support.motions import smooth_poses
+from tests.support.motions import noisy_markers, smooth_poses
 
 
 @pytest.fixture
@@ -128,9 +128,7 @@ def test_initial_pose_finds_a_pose_far_from_rest(model, known):
 def test_tracking_follows_noisy_markers_with_gaps(model):
     poses = smooth_poses(model, 20, seed=12)
     truth = forward_kinematics(model, poses)
-    rng = np.random.default_rng(5)
-    markers = truth + rng.normal(0.0, 0.5, truth.shape)
-    markers[rng.random(truth.shape[:2]) < 0.2] = np.nan
+    markers = noisy_markers(truth, noise=0.5, missing_share=0.2, seed=5)
     fitted = track(model, markers)
     assert np.linalg.norm(forward_kinematics(model, fitted) - truth, axis=-1).mean() < 1.5
 

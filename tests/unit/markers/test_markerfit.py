@@ -12,7 +12,7 @@ from handdb.markers.fit import (
     key_frames,
 )
 from handdb.store.tables import schema
-from tests.support.motions import smooth_poses
+from tests.support.motions import noisy_markers, smooth_poses
 
 
 @pytest.fixture(scope="module")
@@ -25,9 +25,7 @@ def template_palm(model, true_model):
 def capture(template_palm):
     poses = smooth_poses(template_palm, 24, seed=31)
     truth = forward_kinematics(template_palm, poses) / 10.0
-    rng = np.random.default_rng(9)
-    markers = truth + rng.normal(0.0, 0.05, truth.shape)
-    markers[rng.random(truth.shape[:2]) < 0.25] = np.nan
+    markers = noisy_markers(truth, noise=0.05, missing_share=0.25, seed=9)
     return truth, markers
 
 
@@ -79,9 +77,7 @@ def test_fit_positions_are_the_fitted_joints(fit):
 def test_fit_without_bone_lengths_calibrates_them(true_model):
     poses = smooth_poses(true_model, 16, seed=32)
     truth = forward_kinematics(true_model, poses)
-    rng = np.random.default_rng(10)
-    markers = truth + rng.normal(0.0, 0.5, truth.shape)
-    markers[rng.random(truth.shape[:2]) < 0.2] = np.nan
+    markers = noisy_markers(truth, noise=0.5, missing_share=0.2, seed=10)
     fitted = fit_markers(markers, key_step=2)
     assert fitted.calibration is not None
     assert np.abs(fitted.model.bone_lengths - true_model.bone_lengths).max() < 1.5
