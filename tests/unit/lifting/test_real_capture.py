@@ -6,19 +6,12 @@ import pytest
 from handdb.clip import Camera
 from handdb.hand.skeletons import load_skeleton
 from handdb.lifting import lift
+from tests.support import real_data
 from tests.unit.lifting.conftest import ORTHOGRAPHIC
 
 PIXELS_PER_M = 1000.0
 FOCAL_PX = 500.0
 PRINCIPAL_POINT = np.array([320.0, 240.0])
-
-
-def median_bone_lengths(world, skeleton):
-    parent, child = skeleton.bones.T
-    lengths = np.full(skeleton.n_joints, np.nan)
-    lengths[child] = np.median(np.linalg.norm(world[:, child] - world[:, parent], axis=-1),
-                               axis=0)
-    return lengths
 
 
 def mean_depth_error(xyz, world, skeleton):
@@ -31,7 +24,7 @@ def mean_depth_error(xyz, world, skeleton):
 @pytest.mark.parametrize("view", ["orthographic", "pinhole"])
 def test_default_is_no_worse_than_the_thesis_on_the_dhg_capture(dhg_world, view):
     skeleton = load_skeleton("dhg22")
-    lengths = median_bone_lengths(dhg_world, skeleton)
+    lengths = real_data.median_bone_lengths(dhg_world, skeleton)
     if view == "orthographic":
         uv, camera = dhg_world[..., :2] * PIXELS_PER_M, ORTHOGRAPHIC
     else:
