@@ -18,20 +18,24 @@ from concurrent.futures import ThreadPoolExecutor, as_completed
 from dataclasses import dataclass, field
 from datetime import UTC, datetime
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from threadpoolctl import threadpool_limits
 
 from handdb import __version__
 from handdb.build import progress
+from handdb.build.context import BuildContext, StageFailed
 from handdb.build.options import BuildOptions
 from handdb.build.plan import BuildPlan, PlannedClip, plan_build
-from handdb.build.process import BuildContext, StageFailed, process_clip
-from handdb.build.stages import ClipResult
 from handdb.build.window import IN_FLIGHT_PER_WORKER, sliding_window
+from handdb.lazy import LazyFunction
 from handdb.store import tables
 from handdb.store.database import Store
 from handdb.store.quarantine import Refusal
 from handdb.validation.depth import clip_summary
+
+if TYPE_CHECKING:
+    from handdb.build.stages import ClipResult
 
 #: BLAS threads per process during a build. Clips already run in parallel and the stages'
 #: matrices are small (a few dozen columns), so threaded BLAS only makes the workers spin
@@ -43,6 +47,10 @@ DEFAULT_WORKERS = 4
 
 #: Name of the build in the ``runs`` table (and of its Prefect flow).
 FLOW_NAME = "handdb-build"
+
+#: :func:`~handdb.build.process.process_clip`, imported with every stage (numba, scipy)
+#: when the first clip runs: a build with nothing to do never loads them.
+process_clip = LazyFunction("handdb.build.process:process_clip")
 
 
 @dataclass
