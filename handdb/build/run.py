@@ -160,8 +160,18 @@ class Build:
             progress.finished(clip_id, progress.DONE)
 
     def finish(self) -> BuildSummary:
-        """Write the ``quarantine`` table (when it changed) and the ``runs`` row."""
+        """Write the ``quarantine`` table (when it changed), the ``runs`` row and the stamps.
+
+        The files of the clips processed are hashed again once settled (written
+        :data:`~handdb.store.stamps.SETTLED_NS` before), so that the next build takes their
+        digests from their stamps; a clip whose files changed since its commit keeps no
+        entry, and the next build's plan finds it damaged.
+        """
         store = Store(self.plan.db)
+        stamps = dict(self.plan.stamps)
+        for clip_id in self.summary.processed:
+            stamps.update(store.checked_clip_files(clip_id, stamps)[1])
+        store.keep_stamps(stamps)
         self.summary.timings["clips"] = time.perf_counter() - self._clock
         quarantine = self.plan.quarantine(store, self._clip_refusals)
         if quarantine is not None:
