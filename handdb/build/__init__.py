@@ -18,6 +18,7 @@ from typing import TYPE_CHECKING
 from handdb.lazy import lazy_attributes
 
 if TYPE_CHECKING:
+    from handdb.build.context import BuildContext, StageFailed
     from handdb.build.entry import run_build
     from handdb.build.options import BuildOptions
     from handdb.build.orchestrators import (
@@ -27,7 +28,7 @@ if TYPE_CHECKING:
         runner_names,
     )
     from handdb.build.plan import BuildPlan, PlannedClip, plan_build
-    from handdb.build.process import BuildContext, StageFailed, process_clip
+    from handdb.build.process import process_clip
     from handdb.build.run import (
         BLAS_THREADS,
         DEFAULT_WORKERS,
@@ -49,8 +50,8 @@ _EXPORTS = {
     "BuildPlan": "handdb.build.plan",
     "PlannedClip": "handdb.build.plan",
     "plan_build": "handdb.build.plan",
-    "BuildContext": "handdb.build.process",
-    "StageFailed": "handdb.build.process",
+    "BuildContext": "handdb.build.context",
+    "StageFailed": "handdb.build.context",
     "process_clip": "handdb.build.process",
     "BLAS_THREADS": "handdb.build.run",
     "DEFAULT_WORKERS": "handdb.build.run",

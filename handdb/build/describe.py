@@ -12,9 +12,10 @@ from __future__ import annotations
 from dataclasses import dataclass
 from enum import StrEnum
 
+from handdb.build.context import StageFailed
 from handdb.build.keys import STAGES
 from handdb.build.plan import BuildPlan, PlannedClip
-from handdb.build.process import StageFailed, first_stage
+from handdb.build.process import first_stage
 from handdb.build.run import BuildSummary
 from handdb.build.stages import ClipResult
 from handdb.store.quarantine import Refusal

@@ -13,6 +13,8 @@ do finishes without running a single stage, and without starting Prefect.
 
 from __future__ import annotations
 
+import time
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -22,13 +24,14 @@ from handdb.build.keys import STAGES, first_changed_stage, stage_keys, table_has
 from handdb.build.options import BuildOptions
 from handdb.errors import DamagedFileError, InputError
 from handdb.ingest import clip_content_hash, discover
-from handdb.ingest.inbox import ClipEntry
+from handdb.ingest.inbox import ClipEntry, clip_files
 from handdb.ingest.registry import MARKERS_KIND, get_format
 from handdb.ingest.xray import MAX_XRAY_NAME_BYTES, XRAY_SUFFIX, read_xray
 from handdb.lengths.ratios import joint_ratios
 from handdb.store import tables
 from handdb.store.database import Store
 from handdb.store.quarantine import Refusal, quarantine_table
+from handdb.store.stamps import Hashed, entry_if_settled, entry_key, known_digest, stamp
 
 
 @dataclass(frozen=True)
@@ -97,6 +100,9 @@ class BuildPlan:
     xray: XrayInputs
     refusals: tuple[Refusal, ...] = field(default=())
     repairs: tuple[str, ...] = field(default=())
+    #: The digests of the inbox's clips and of the stored files checked, that stand after
+    #: the plan (:mod:`handdb.store.stamps`), for the next build to hash only what changed.
+    stamps: Mapping[str, Hashed] = field(default_factory=dict)
 
     @property
     def todo(self) -> tuple[PlannedClip, ...]:
@@ -195,6 +201,8 @@ def plan_build(inbox: str | Path, db: str, options: BuildOptions) -> BuildPlan:
         If ``inbox`` is not a folder.
     """
     store = Store(db)
+    known = store.stamps()
+    stamps: dict[str, Hashed] = {}
     scan = discover(Path(inbox))
     xray = read_xray_inputs(list(scan.others.get("xray", ())), store)
     ratios_hash = table_hash(xray.ratios)
@@ -209,21 +217,46 @@ def plan_build(inbox: str | Path, db: str, options: BuildOptions) -> BuildPlan:
             refusals.append(Refusal.from_error(twin))
             continue
         try:
-            digest = clip_content_hash(entry)
+            digest, hashed = _content_hash(entry, known)
         except InputError as error:
             refusals.append(Refusal.from_error(error))
             continue
+        stamps.update(hashed)
         markers = get_format(entry.track_format).kind == MARKERS_KIND
         keys = stage_keys(digest, options, ratios_hash, marker_clip=markers)
         start = first_changed_stage(keys, stored.get(entry.clip_id))
-        damage = _clip_damage(store, entry.clip_id, committed, stored, start)
+        damage, checked = _clip_damage(store, entry.clip_id, committed, stored, start, known)
+        stamps.update(checked)
         if damage is not None:
             repairs.append(f"clip {entry.clip_id}: {damage}; rebuilt from the inbox")
             start = STAGES[0]
         clips.append(PlannedClip(entry=entry, content_hash=digest, keys=keys, start=start,
                                  markers=markers))
     return BuildPlan(inbox=str(inbox), db=db, options=options, clips=tuple(clips), xray=xray,
-                     refusals=tuple(refusals), repairs=tuple(repairs))
+                     refusals=tuple(refusals), repairs=tuple(repairs), stamps=stamps)
+
+
+def _content_hash(entry: ClipEntry, known: Mapping[str, Hashed]
+                  ) -> tuple[str, dict[str, Hashed]]:
+    """:func:`~handdb.ingest.clip_content_hash`, from ``known`` while no file has changed.
+
+    Also the entry of the hash, by its key, when it stands (its files are settled). The
+    hash covers file names relative to the inbox, so the inbox is part of the key.
+
+    Raises
+    ------
+    InputError
+        If a file is not a regular file or is larger than the limit.
+    """
+    files, scope = [str(file) for file in clip_files(entry)], str(entry.inbox)
+    key = entry_key(files, scope)
+    digest = known_digest(known, files, scope)
+    if digest is not None:
+        return digest, {key: known[key]}
+    before, stamped = time.time_ns(), [stamp(file) for file in files]
+    digest = clip_content_hash(entry)
+    hashed = entry_if_settled(files, stamped, digest, before)
+    return digest, {} if hashed is None else {key: hashed}
 
 
 def _stored_twin(entry: ClipEntry, committed: set[str], store: Store) -> InputError | None:
@@ -245,15 +278,17 @@ def _stored_twin(entry: ClipEntry, committed: set[str], store: Store) -> InputEr
 
 
 def _clip_damage(store: Store, clip_id: str, committed: set[str],
-                 stored: dict[str, dict[str, str]], start: str | None) -> str | None:
+                 stored: dict[str, dict[str, str]], start: str | None,
+                 known: Mapping[str, Hashed]) -> tuple[str | None, dict[str, Hashed]]:
     """Why the committed clip ``clip_id`` must be rebuilt whole, or ``None``.
 
     A clip rebuilt whole anyway (``start`` is the first stage) is not checked; one whose
     ``clips`` file does not read is damaged, and one the build would keep, in whole or in
-    part, is checked against the record of its files.
+    part, is checked against the record of its files, hashing those whose stamps differ
+    from ``known``; the entries of its files that stand come with the answer.
     """
     if clip_id not in committed or (start == STAGES[0] and clip_id in stored):
-        return None
+        return None, {}
     if clip_id not in stored:
-        return f"clips/{clip_id}.parquet is damaged"
-    return store.clip_damage(clip_id)
+        return f"clips/{clip_id}.parquet is damaged", {}
+    return store.checked_clip_files(clip_id, known)

@@ -3,14 +3,11 @@
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass
 from pathlib import Path
 
-import pyarrow as pa
-
 from handdb.build import progress
+from handdb.build.context import BuildContext, StageFailed
 from handdb.build.keys import MARKER_FIT_STAGES, STAGES
-from handdb.build.options import BuildOptions
 from handdb.build.plan import PlannedClip
 from handdb.build.reload import resume
 from handdb.build.rows import clip_tables
@@ -25,47 +22,8 @@ from handdb.build.stages import (
     resolve_bone_lengths,
     validate,
 )
-from handdb.errors import HanddbError, InputError
-from handdb.store.database import Store
+from handdb.errors import InputError
 from handdb.store.quarantine import Refusal
-
-
-@dataclass(frozen=True)
-class BuildContext:
-    """What every clip of a build shares: where it reads and writes, and how it computes."""
-
-    inbox: str
-    db: str
-    options: BuildOptions
-    ratios: pa.Table
-
-    @property
-    def store(self) -> Store:
-        """The database."""
-        return Store(self.db)
-
-
-class StageFailed(HanddbError):
-    """Writing a clip's results into the database failed: the build fails that clip.
-
-    The database's storage is at fault (a full disk, a path that is a file), not the
-    clip; the next build tries the clip again. The original error is the ``__cause__``;
-    ``stage`` names where it happened.
-    """
-
-    def __init__(self, clip_id: str, stage: str, error: BaseException) -> None:
-        self.clip_id = clip_id
-        self.stage = stage
-        super().__init__(f"{stage}: {type(error).__name__}: {error}")
-
-
-#: What each stage does, for messages.
-STAGE_WORK: dict[str, str] = {
-    "ingest": "reading the clip's files", "lengths": "estimating bone lengths",
-    "gap_fill": "gap filling", "lift": "lifting to 3D", "validate": "validation",
-    "export": "writing its USD and previews", "commit": "storing its tables",
-    "model_fit": "fitting the hand model to its markers",
-}
 
 #: What progress calls a marker clip's bone-length stage, which is its whole model fit
 #: (:data:`~handdb.build.keys.MARKER_FIT_STAGES`), the longest stage of any clip.
@@ -89,9 +47,10 @@ def _internal_refusal(error: Exception, clip_id: str, sidecar: str, stage: str) 
     """A clip a stage broke on: refused with what happened, blaming no key of its files."""
     return Refusal(
         file=sidecar, error_type=type(error).__name__, clip_id=clip_id, stage=stage,
-        reason=f"{STAGE_WORK[stage]} failed on this clip ({type(error).__name__}: {error}); "
-               "its files were read, but handdb could not process them: the clip's stored "
-               "rows are kept, and the fault is handdb's, please report it with the clip")
+        reason=f"{progress.STAGE_WORK[stage]} failed on this clip "
+               f"({type(error).__name__}: {error}); its files were read, but handdb could not "
+               "process them: the clip's stored rows are kept, and the fault is handdb's, "
+               "please report it with the clip")
 
 
 def _stage_runners(context: BuildContext, markers: bool

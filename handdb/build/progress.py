@@ -13,6 +13,14 @@ import contextlib
 from collections.abc import Iterator
 from typing import Protocol
 
+#: What each stage does, for messages.
+STAGE_WORK: dict[str, str] = {
+    "ingest": "reading the clip's files", "lengths": "estimating bone lengths",
+    "gap_fill": "gap filling", "lift": "lifting to 3D", "validate": "validation",
+    "export": "writing its USD and previews", "commit": "storing its tables",
+    "model_fit": "fitting the hand model to its markers",
+}
+
 #: How a clip ended: processed and committed.
 DONE = "done"
 #: Nothing of the clip changed since the last build.
@@ -30,7 +38,7 @@ class Reporter(Protocol):
         """The build will go through ``n_clips`` clips."""
 
     def started(self, clip_id: str, stage: str) -> None:
-        """``clip_id`` starts ``stage``, a key of :data:`handdb.build.process.STAGE_WORK`.
+        """``clip_id`` starts ``stage``, a key of :data:`STAGE_WORK`.
 
         A marker clip's model fit, which stands for three stages, is ``model_fit``.
         """

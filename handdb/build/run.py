@@ -18,20 +18,24 @@ from concurrent.futures import ThreadPoolExecutor, as_completed
 from dataclasses import dataclass, field
 from datetime import UTC, datetime
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from threadpoolctl import threadpool_limits
 
 from handdb import __version__
 from handdb.build import progress
+from handdb.build.context import BuildContext, StageFailed
 from handdb.build.options import BuildOptions
 from handdb.build.plan import BuildPlan, PlannedClip, plan_build
-from handdb.build.process import BuildContext, StageFailed, process_clip
-from handdb.build.stages import ClipResult
 from handdb.build.window import IN_FLIGHT_PER_WORKER, sliding_window
+from handdb.lazy import LazyFunction
 from handdb.store import tables
 from handdb.store.database import Store
 from handdb.store.quarantine import Refusal
 from handdb.validation.depth import clip_summary
+
+if TYPE_CHECKING:
+    from handdb.build.stages import ClipResult
 
 #: BLAS threads per process during a build. Clips already run in parallel and the stages'
 #: matrices are small (a few dozen columns), so threaded BLAS only makes the workers spin
@@ -43,6 +47,10 @@ DEFAULT_WORKERS = 4
 
 #: Name of the build in the ``runs`` table (and of its Prefect flow).
 FLOW_NAME = "handdb-build"
+
+#: :func:`~handdb.build.process.process_clip`, imported with every stage (numba, scipy)
+#: when the first clip runs: a build with nothing to do never loads them.
+process_clip = LazyFunction("handdb.build.process:process_clip")
 
 
 @dataclass
@@ -152,8 +160,18 @@ class Build:
             progress.finished(clip_id, progress.DONE)
 
     def finish(self) -> BuildSummary:
-        """Write the ``quarantine`` table (when it changed) and the ``runs`` row."""
+        """Write the ``quarantine`` table (when it changed), the ``runs`` row and the stamps.
+
+        The files of the clips processed are hashed again once settled (written
+        :data:`~handdb.store.stamps.SETTLED_NS` before), so that the next build takes their
+        digests from their stamps; a clip whose files changed since its commit keeps no
+        entry, and the next build's plan finds it damaged.
+        """
         store = Store(self.plan.db)
+        stamps = dict(self.plan.stamps)
+        for clip_id in self.summary.processed:
+            stamps.update(store.checked_clip_files(clip_id, stamps)[1])
+        store.keep_stamps(stamps)
         self.summary.timings["clips"] = time.perf_counter() - self._clock
         quarantine = self.plan.quarantine(store, self._clip_refusals)
         if quarantine is not None:

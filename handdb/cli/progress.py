@@ -18,7 +18,6 @@ from rich.console import Console
 from rich.progress import BarColumn, Progress, TaskID, TextColumn, TimeElapsedColumn
 
 from handdb.build import progress
-from handdb.build.process import STAGE_WORK
 
 #: Rich redraws of the live display per second.
 REFRESH_PER_SECOND = 4
@@ -114,7 +113,7 @@ class LiveProgress:
                 self._clips[clip_id] = self._bar.add_task(f"  {clip_id}", total=None,
                                                           status="")
             task = self._clips[clip_id]
-        self._bar.update(task, status=STAGE_WORK[stage])
+        self._bar.update(task, status=progress.STAGE_WORK[stage])
 
     def finished(self, clip_id: str, outcome: str) -> None:
         """Drop ``clip_id``'s line, move the bar, give the ETA."""
@@ -155,7 +154,7 @@ class LineProgress:
     def started(self, clip_id: str, stage: str) -> None:
         """Say which stage ``clip_id`` starts."""
         self._tally.started(clip_id, stage)
-        self._line(f"{clip_id}: {STAGE_WORK[stage]}")
+        self._line(f"{clip_id}: {progress.STAGE_WORK[stage]}")
 
     def finished(self, clip_id: str, outcome: str) -> None:
         """Say how ``clip_id`` ended, how far the build is and the ETA."""

@@ -301,6 +301,11 @@ def _files(path: Path) -> list[Path]:
     return members(path) if members is not None else folder_files(path)
 
 
+def clip_files(entry: ClipEntry) -> list[Path]:
+    """The files :func:`clip_content_hash` reads, in the order it reads them."""
+    return [file for path in entry.paths for file in _files(path)]
+
+
 def clip_content_hash(entry: ClipEntry) -> str:
     """SHA-256 (hex) over the clip's input files: their names and bytes, in a fixed order.
 
@@ -317,14 +322,13 @@ def clip_content_hash(entry: ClipEntry) -> str:
         If a file is not a regular file or is larger than the limit.
     """
     digest = hashlib.sha256()
-    for path in entry.paths:
-        for file in _files(path):
-            size = checked_size(file)
-            digest.update(file.relative_to(entry.inbox).as_posix().encode() + b"\0")
-            digest.update(f"{size}\0".encode())
-            with file.open("rb") as stream:
-                while chunk := stream.read(HASH_CHUNK_BYTES):
-                    digest.update(chunk)
+    for file in clip_files(entry):
+        size = checked_size(file)
+        digest.update(file.relative_to(entry.inbox).as_posix().encode() + b"\0")
+        digest.update(f"{size}\0".encode())
+        with file.open("rb") as stream:
+            while chunk := stream.read(HASH_CHUNK_BYTES):
+                digest.update(chunk)
     return digest.hexdigest()
 
 

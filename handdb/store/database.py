@@ -32,8 +32,9 @@ import json
 import os
 import socket
 import sys
+import time
 import uuid
-from collections.abc import Iterator
+from collections.abc import Iterator, Mapping
 from dataclasses import dataclass
 
 import fsspec
@@ -43,6 +44,16 @@ from fsspec.implementations.local import LocalFileSystem
 
 from handdb.errors import DamagedFileError, DatabaseLockedError, DatabasePathError, StoreError
 from handdb.store import tables
+from handdb.store.stamps import (
+    STAMPS_FILE,
+    Hashed,
+    entry_if_settled,
+    entry_key,
+    known_digest,
+    load_stamps,
+    save_stamps,
+    stamp,
+)
 
 #: Tables holding one file per clip; a clip commit replaces all of them.
 CLIP_TABLES: tuple[str, ...] = tuple(
@@ -406,24 +417,68 @@ class Store:
         """Why committed clip ``clip_id`` cannot be trusted, or ``None`` when it can.
 
         Every file recorded at its commit (``clip_files``) must exist with the size and
-        checksum it had then.
+        checksum it had then; each is hashed.
+        """
+        return self.checked_clip_files(clip_id, {})[0]
+
+    def checked_clip_files(self, clip_id: str, known: Mapping[str, Hashed]
+                           ) -> tuple[str | None, dict[str, Hashed]]:
+        """:meth:`clip_damage`, hashing only the files whose stamps differ from ``known``.
+
+        Returns
+        -------
+        damage : str or None
+            Why the clip cannot be trusted, or ``None``.
+        entries : dict
+            The :class:`~handdb.store.stamps.Hashed` entries of its files that stand after
+            the check (none when the clip is damaged, or the database is not local).
         """
         record_path = self.relative(self.partition_path(FILES_TABLE, clip_id))
         try:
             record = self.read(FILES_TABLE, clip_id)
         except DamagedFileError:
-            return f"the record of its files, {record_path}, is damaged"
+            return f"the record of its files, {record_path}, is damaged", {}
         if record is None:
-            return f"the record of its files, {record_path}, is missing"
+            return f"the record of its files, {record_path}, is missing", {}
         rows = record.to_pydict()
+        entries: dict[str, Hashed] = {}
         for file, size, sha256 in zip(rows["file"], rows["bytes"], rows["sha256"], strict=True):
-            if not self.fs.isfile(self.path(file)):
-                return f"{file} is missing"
-            if self.fs.size(self.path(file)) != size:
-                return f"{file} is damaged (it has changed size since the clip was committed)"
-            if self._fingerprint(file)[1] != sha256:
-                return f"{file} is damaged (its checksum differs from the commit's)"
-        return None
+            path = self.path(file)
+            if not self.fs.isfile(path):
+                return f"{file} is missing", {}
+            if self.fs.size(path) != size:
+                return f"{file} is damaged (it has changed size since the clip was committed)", {}
+            digest, entry = self._stamped_digest(file, known)
+            if digest != sha256:
+                return f"{file} is damaged (its checksum differs from the commit's)", {}
+            if entry is not None:
+                entries[entry_key(entry.files)] = entry
+        return None, entries
+
+    def _stamped_digest(self, relative: str, known: Mapping[str, Hashed]
+                        ) -> tuple[str, Hashed | None]:
+        """SHA-256 of the file at ``relative``, from ``known`` while its stamp is unchanged.
+
+        Also its entry, when it stands (only local files have stamps).
+        """
+        if not self.is_local:
+            return self._fingerprint(relative)[1], None
+        path = [self.path(relative)]
+        digest = known_digest(known, path)
+        if digest is not None:
+            return digest, known[entry_key(path)]
+        before, stamped = time.time_ns(), [stamp(path[0])]
+        digest = self._fingerprint(relative)[1]
+        return digest, entry_if_settled(path, stamped, digest, before)
+
+    def stamps(self) -> dict[str, Hashed]:
+        """The entries kept in the database folder (:mod:`handdb.store.stamps`)."""
+        return load_stamps(self.path(STAMPS_FILE)) if self.is_local else {}
+
+    def keep_stamps(self, entries: Mapping[str, Hashed]) -> None:
+        """Keep ``entries`` in the database folder, in place of those it held."""
+        if self.is_local:
+            save_stamps(self.path(STAMPS_FILE), entries)
 
     def clip_build_keys(self) -> dict[str, str]:
         """``clip_id -> build_key`` of every committed clip whose ``clips`` file reads."""

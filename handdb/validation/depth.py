@@ -9,7 +9,6 @@ The position error (MPJPE) compares root-relative ``(x, y, z)`` the same way.
 
 from __future__ import annotations
 
-import io
 from collections.abc import Mapping
 
 import numpy as np
@@ -19,14 +18,11 @@ from handdb.clip import METERS_PER_UNIT
 from handdb.hand.skeletons import Skeleton
 from handdb.lifting.result import LiftResult
 from handdb.store import tables
+from handdb.validation.chart import draw_comparison_chart
 
 #: Bones whose true depth span is below this are left out of the sign accuracy, metres.
 SIGN_THRESHOLD_M = 0.005
 
-#: Comparison chart: size (inches), resolution and fixed margins (fractions of the figure).
-_CHART_INCHES = (12.0, 4.0)
-_CHART_DPI = 100
-_CHART_MARGINS = {"left": 0.06, "right": 0.99, "bottom": 0.25, "top": 0.92}
 
 
 def _xyz(estimate: LiftResult | np.ndarray) -> np.ndarray:
@@ -190,8 +186,8 @@ def markdown_summary(clip_id: str, table: pa.Table) -> str:
 def comparison_chart(clip_id: str, table: pa.Table, skeleton: Skeleton) -> bytes:
     """Draw a PNG bar chart of mean ``|ΔZ|`` per joint and method for one clip.
 
-    Drawn on a :class:`~matplotlib.figure.Figure` with the Agg canvas and a fixed layout
-    (no pyplot state), so charts can be made from worker threads at once.
+    Drawn with Pillow (:func:`handdb.validation.chart.draw_comparison_chart`), so charts
+    can be made from worker threads at once.
 
     Parameters
     ----------
@@ -207,28 +203,12 @@ def comparison_chart(clip_id: str, table: pa.Table, skeleton: Skeleton) -> bytes
     bytes
         The PNG file's content.
     """
-    # matplotlib takes 0.7 s to import: loaded when a chart is drawn, not with the module
-    from matplotlib.backends.backend_agg import FigureCanvasAgg
-    from matplotlib.figure import Figure
-
     rows = table.to_pylist()
     methods = list(dict.fromkeys(r["method"] for r in rows))
     values = {(r["method"], r["joint"]): r["dz_mean"] for r in rows}
-    x = np.arange(skeleton.n_joints)
-    width = 0.8 / max(len(methods), 1)
-    figure = Figure(figsize=_CHART_INCHES, dpi=_CHART_DPI)
-    FigureCanvasAgg(figure)
-    figure.subplots_adjust(**_CHART_MARGINS)
-    axes = figure.add_subplot()
-    for k, method in enumerate(methods):
-        heights = [np.nan if values.get((method, joint)) is None else values[(method, joint)]
-                   for joint in skeleton.joints]
-        axes.bar(x + k * width, heights, width, label=method)
+    heights = np.array([[np.nan if values.get((m, joint)) is None else values[(m, joint)]
+                         for joint in skeleton.joints] for m in methods],
+                       dtype=np.float64).reshape(len(methods), skeleton.n_joints)
     units = rows[0]["units"] if rows else ""
-    axes.set_xticks(x + 0.4 - width / 2, skeleton.joints, rotation=60, ha="right")
-    axes.set_ylabel(f"mean |ΔZ| root-relative ({units})")
-    axes.set_title(f"{clip_id}: depth error per joint")
-    axes.legend()
-    buffer = io.BytesIO()
-    figure.savefig(buffer, format="png")
-    return buffer.getvalue()
+    return draw_comparison_chart(f"{clip_id}: depth error per joint", skeleton.joints,
+                                 methods, heights, f"mean |ΔZ| root-relative ({units})")

@@ -6,6 +6,7 @@ import sys
 import pytest
 from typer.testing import CliRunner
 
+from handdb.build import BuildOptions, build_in_process
 from handdb.cli import LAZY_COMMANDS, app, load_command
 
 #: Modules ``handdb --help`` and ``handdb sql`` must not import (each costs 0.2-1 s).
@@ -13,6 +14,9 @@ HEAVY = ("pxr", "scipy", "matplotlib", "prefect", "numba", "handdb.lifting",
          "handdb.export", "handdb.synthetic")
 #: The lifting package's name table, which every command imports to list the methods.
 LIGHT = {"handdb.lifting", "handdb.lifting.methods"}
+#: Light modules of a build with nothing to do: the export package's name table (the plan
+#: reads the export stage's version) and the lift's result type (the run's summary).
+NOOP_BUILD_LIGHT = {"handdb.export", "handdb.export.formats", "handdb.lifting.result"}
 
 PROBE = """
 import sys
@@ -39,6 +43,15 @@ def imported_by(argv: list[str]) -> set[str]:
 @pytest.mark.parametrize("argv", [["--help"], ["sql", "--help"], ["build", "--help"]])
 def test_light_commands_do_not_import_the_heavy_libraries(argv):
     assert imported_by(argv) == set()
+
+
+def test_a_rebuild_with_nothing_to_do_loads_no_stage(tmp_path, write_clip):
+    inbox, db = tmp_path / "inbox", tmp_path / "db"
+    inbox.mkdir()
+    write_clip(inbox, "solo", seed=0)
+    assert build_in_process(inbox, str(db), BuildOptions(export_usd=False)).processed == ["solo"]
+    argv = ["build", "--inbox", str(inbox), "--db", str(db), "--no-usd"]
+    assert imported_by(argv) - NOOP_BUILD_LIGHT == set()
 
 
 def test_a_lazy_command_imports_its_module_when_it_runs():
