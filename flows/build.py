@@ -213,6 +213,6 @@ def build(inbox: str, db: str, gap_fill: str | None = None, lift: str | None = N
     create_markdown_artifact(markdown=summary_markdown(summary), key=key,
                              description=f"handdb build summary of {db}")
     _rename(run_name(summary))
-    outcome = run_outcome(summary)
-    final = Failed if outcome.kind is OutcomeKind.failed else Completed
-    return final(name=outcome.name, message=outcome.message, data=summary)
+    ending = run_outcome(summary)
+    final = Failed if ending.kind is OutcomeKind.failed else Completed
+    return final(name=ending.name, message=ending.message, data=summary)

@@ -62,6 +62,7 @@ def stop(pid: int) -> None:
 
 def _release(reaper: subprocess.Popen) -> None:
     """Tell the reaper this process exits normally, and wait for it to end."""
+    assert reaper.stdin is not None, "the reaper is started with a pipe to its input"
     try:
         reaper.stdin.write(RELEASE)
         reaper.stdin.close()

@@ -49,6 +49,7 @@ def shared_api() -> Iterator[str]:
 
     server = SubprocessASGIServer()
     server.start()
+    assert server.server_process is not None, "a started server has its process"
     _reaped(server.server_process.pid)
     _TEMPORARY_APIS.add(server.api_url)
     with temporary_settings({PREFECT_API_URL: server.api_url}):
