@@ -38,8 +38,8 @@ bench: $(INSTALLED)
 	$(BIN)/python benchmarks/run.py
 
 lint: $(INSTALLED)
-	$(BIN)/ruff check handdb flows tests benchmarks
-	$(BIN)/mypy handdb
+	$(BIN)/ruff check handdb flows tests benchmarks notebooks
+	$(BIN)/mypy handdb flows
 
 clean:
 	rm -rf data .prefect .pytest_cache benchmarks/out

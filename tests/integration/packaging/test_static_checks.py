@@ -1,4 +1,4 @@
-"""The library type-checks and the repository lints clean, as ``make lint`` checks.
+"""The library and its flows type-check and the repository lints clean, as ``make lint`` checks.
 
 Both run in a subprocess on the repository's sources; a failure shows the tool's report.
 """
@@ -22,9 +22,10 @@ def _check(command: list[str]) -> None:
 
 
 def test_library_type_checks(tmp_path):
-    _check([str(TOOLS / "mypy"), "--cache-dir", str(tmp_path / "mypy-cache"), "handdb"])
+    _check([str(TOOLS / "mypy"), "--cache-dir", str(tmp_path / "mypy-cache"), "handdb",
+            "flows"])
 
 
 def test_sources_lint_clean():
     _check([str(TOOLS / "ruff"), "check", "--no-cache", "handdb", "flows", "tests",
-            "benchmarks"])
+            "benchmarks", "notebooks"])
