@@ -84,7 +84,7 @@ from handdb.lifting.settle import (
     Votes,
     chosen_votes,
     finger_signs,
-    mirror_log_odds,
+    mirror_evidence,
     pick_states,
     settle,
     votes_of,
@@ -138,7 +138,8 @@ class Solution:
     finger_odds
         ``(T, F, 3) float64``: posterior log-odds of each finger bone's positive sign.
     mirror_log_odds
-        Log-odds of the solution against its clip-wide mirror (>= 0).
+        Log-odds of the solution against its clip-wide mirror, counting the clip's frames
+        once per independent frame; below 0 where the plain sum chose against them.
     """
 
     hypotheses: Hypotheses
@@ -325,8 +326,10 @@ def _choose(hypotheses: list[Hypotheses], parts: PalmParts,
     """Settle every case and keep the best, with its log-odds against the mirror.
 
     A case of mirrored states is weighed against its own mirror image
-    (:func:`~handdb.lifting.settle.mirror_log_odds`) and flipped when that is likelier;
-    the two chiralities of a template are each other's mirror images.
+    (:func:`~handdb.lifting.settle.mirror_evidence`) and flipped when that is likelier;
+    the two chiralities of a template are each other's mirror images. The log-odds
+    returned count the clip's frames once per independent frame
+    (:meth:`~handdb.lifting.evidence.Evidence.calibrated`).
     """
     palm_floor, thumb_floor = _floors(parts, bone_lengths)
     solved = []
@@ -334,15 +337,19 @@ def _choose(hypotheses: list[Hypotheses], parts: PalmParts,
         settled = settle(hyp.case, palm_floor, thumb_floor)
         odds = np.nan
         if hyp.case.mirrored:
-            odds = mirror_log_odds(hyp.case, settled)
-            if odds < 0:
-                settled = dataclasses.replace(_flipped(settled), score=settled.score - odds)
-                odds = -odds
+            gap = mirror_evidence(hyp.case, settled)
+            if gap.total() < 0:
+                settled = dataclasses.replace(_flipped(settled),
+                                              evidence=settled.evidence - gap)
+                gap = -gap
+            odds = gap.calibrated()
         solved.append((hyp, settled, odds))
     best = max(range(len(solved)), key=lambda i: solved[i][1].score)
     hyp, settled, odds = solved[best]
     if not hyp.case.mirrored:
-        odds = settled.score - max(s.score for i, (_, s, _) in enumerate(solved) if i != best)
+        runner_up = max((s for i, (_, s, _) in enumerate(solved) if i != best),
+                        key=lambda s: s.score)
+        odds = (settled.evidence - runner_up.evidence).calibrated()
     return hyp, settled, float(odds)
 
 
