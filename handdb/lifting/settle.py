@@ -135,7 +135,7 @@ class Case:
         per sign and palm state; ``None`` without a thumb base.
     mirrored
         Whether palm state 1 stands for state 0's mirror image (plane fits): the clip-wide
-        mirror is then weighed by :func:`mirror_log_odds`. A template's two chiralities
+        mirror is then weighed by :func:`mirror_evidence`. A template's two chiralities
         are separate cases instead.
     shape_log_likelihood
         Nats: how well the case's palm shape fits the average hand's, once for the clip
