@@ -34,7 +34,9 @@ The confidence of each bone's sign is its posterior, discounted by the probabili
 the whole clip is mirrored: flipping every sign at once changes only the
 flexion-direction evidence and the thumb base's side, so a clip without clear flexion (a
 flat hand) cannot settle it, and the result says so (``mirror_ambiguous``). A recovered
-template comes in two mirror-image chiralities; both are solved and compared.
+template comes in two mirror-image chiralities; both are solved and compared. The odds of
+either comparison count each source's frames once per independent frame
+(:mod:`handdb.lifting.evidence`): a hand holding one pose is one piece of evidence.
 
 With a pinhole camera the root's depth comes from the bone lengths and the rays
 (:func:`handdb.lifting.pinhole.estimate_root_depth`), then every joint is placed on its ray
