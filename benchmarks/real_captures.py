@@ -106,7 +106,7 @@ def _native_view(truth: np.ndarray, camera_model: str, noise: float,
     return uv + rng.normal(scale=noise, size=uv.shape) if noise > 0 else uv, camera
 
 
-def _views(captures: list[real_data.Capture], n_views: int, pseudo: bool) -> CaseSource:
+def view_cases(captures: list[real_data.Capture], n_views: int, pseudo: bool) -> CaseSource:
     """Cases of captures turned to fixed random views (wobbled into pseudo-clips)."""
     def cases(camera_model: str, noise: float, rng: np.random.Generator) -> Iterator[Case]:
         distances = np.random.default_rng(VIEW_SEED).uniform(*real_data.DISTANCE_MM, n_views)
@@ -124,7 +124,7 @@ def _views(captures: list[real_data.Capture], n_views: int, pseudo: bool) -> Cas
     return cases
 
 
-def _native(capture: real_data.Capture) -> CaseSource:
+def native_cases(capture: real_data.Capture) -> CaseSource:
     """The capture in its own view."""
     def cases(camera_model: str, noise: float, rng: np.random.Generator) -> Iterator[Case]:
         skeleton = load_skeleton(capture.skeleton)
@@ -134,7 +134,7 @@ def _native(capture: real_data.Capture) -> CaseSource:
     return cases
 
 
-def _synthetic(seeds: tuple[int, ...], motions: tuple[str, ...]) -> CaseSource:
+def synthetic_cases(seeds: tuple[int, ...], motions: tuple[str, ...]) -> CaseSource:
     """Hands of the population, each in its own camera, right hands."""
     def cases(camera_model: str, noise: float, rng: np.random.Generator) -> Iterator[Case]:
         for motion in motions:
@@ -153,23 +153,23 @@ def datasets(plan: dict) -> list[tuple[str, str, CaseSource | None]]:
     out: list[tuple[str, str, CaseSource | None]] = []
     if DHG_SAMPLE.is_file():
         dhg = real_data.load_dhg(DHG_SAMPLE)
-        out += [("dhg", "DHG in its own view (95 frames)", _native(dhg)),
-                ("dhg", f"DHG in {plan['views']} random views", _views([dhg], plan["views"],
-                                                                       False))]
+        out += [("dhg", "DHG in its own view (95 frames)", native_cases(dhg)),
+                ("dhg", f"DHG in {plan['views']} random views",
+                 view_cases([dhg], plan["views"], False))]
     else:
         out.append(("dhg", "DHG", None))
     if INTERHAND.is_file():
         hands = real_data.load_interhand(INTERHAND)
         out += [("interhand-single", f"InterHand2.6M, {len(hands)} hands x {plan['views']} "
-                 "views, single frames", _views(hands, plan["views"], False)),
+                 "views, single frames", view_cases(hands, plan["views"], False)),
                 ("interhand-pseudo", f"InterHand2.6M, {len(hands)} hands x {plan['views']} "
                  f"views, {real_data.PSEUDO_FRAMES}-frame rigid pseudo-clips",
-                 _views(hands, plan["views"], True))]
+                 view_cases(hands, plan["views"], True))]
     else:
         out.append(("interhand-single", "InterHand2.6M", None))
     out.append(("synthetic", f"Synthetic population, motions {', '.join(plan['motions'])}, "
                 f"seeds {plan['seeds']}, {SYNTHETIC_FRAMES} frames",
-                _synthetic(plan["seeds"], plan["motions"])))
+                synthetic_cases(plan["seeds"], plan["motions"])))
     return out
 
 

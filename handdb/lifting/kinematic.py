@@ -34,7 +34,9 @@ The confidence of each bone's sign is its posterior, discounted by the probabili
 the whole clip is mirrored: flipping every sign at once changes only the
 flexion-direction evidence and the thumb base's side, so a clip without clear flexion (a
 flat hand) cannot settle it, and the result says so (``mirror_ambiguous``). A recovered
-template comes in two mirror-image chiralities; both are solved and compared.
+template comes in two mirror-image chiralities; both are solved and compared. The odds of
+either comparison count each source's frames once per independent frame
+(:mod:`handdb.lifting.evidence`): a hand holding one pose is one piece of evidence.
 
 With a pinhole camera the root's depth comes from the bone lengths and the rays
 (:func:`handdb.lifting.pinhole.estimate_root_depth`), then every joint is placed on its ray
@@ -84,7 +86,7 @@ from handdb.lifting.settle import (
     Votes,
     chosen_votes,
     finger_signs,
-    mirror_log_odds,
+    mirror_evidence,
     pick_states,
     settle,
     votes_of,
@@ -138,7 +140,8 @@ class Solution:
     finger_odds
         ``(T, F, 3) float64``: posterior log-odds of each finger bone's positive sign.
     mirror_log_odds
-        Log-odds of the solution against its clip-wide mirror (>= 0).
+        Log-odds of the solution against its clip-wide mirror, counting the clip's frames
+        once per independent frame; below 0 where the plain sum chose against them.
     """
 
     hypotheses: Hypotheses
@@ -325,8 +328,10 @@ def _choose(hypotheses: list[Hypotheses], parts: PalmParts,
     """Settle every case and keep the best, with its log-odds against the mirror.
 
     A case of mirrored states is weighed against its own mirror image
-    (:func:`~handdb.lifting.settle.mirror_log_odds`) and flipped when that is likelier;
-    the two chiralities of a template are each other's mirror images.
+    (:func:`~handdb.lifting.settle.mirror_evidence`) and flipped when that is likelier;
+    the two chiralities of a template are each other's mirror images. The log-odds
+    returned count the clip's frames once per independent frame
+    (:meth:`~handdb.lifting.evidence.Evidence.calibrated`).
     """
     palm_floor, thumb_floor = _floors(parts, bone_lengths)
     solved = []
@@ -334,15 +339,19 @@ def _choose(hypotheses: list[Hypotheses], parts: PalmParts,
         settled = settle(hyp.case, palm_floor, thumb_floor)
         odds = np.nan
         if hyp.case.mirrored:
-            odds = mirror_log_odds(hyp.case, settled)
-            if odds < 0:
-                settled = dataclasses.replace(_flipped(settled), score=settled.score - odds)
-                odds = -odds
+            gap = mirror_evidence(hyp.case, settled)
+            if gap.total() < 0:
+                settled = dataclasses.replace(_flipped(settled),
+                                              evidence=settled.evidence - gap)
+                gap = -gap
+            odds = gap.calibrated()
         solved.append((hyp, settled, odds))
     best = max(range(len(solved)), key=lambda i: solved[i][1].score)
     hyp, settled, odds = solved[best]
     if not hyp.case.mirrored:
-        odds = settled.score - max(s.score for i, (_, s, _) in enumerate(solved) if i != best)
+        runner_up = max((s for i, (_, s, _) in enumerate(solved) if i != best),
+                        key=lambda s: s.score)
+        odds = (settled.evidence - runner_up.evidence).calibrated()
     return hyp, settled, float(odds)
 
 

@@ -18,8 +18,10 @@ hand prior's scores of every finger under each (:mod:`handdb.lifting.hand_prior`
    tilt and then the thumb base's sign are chains over the frames.
 
 :func:`finger_signs` then settles the fingers' signs under the chosen tilt exactly as the
-hand prior and the temporal chains always have, and :func:`mirror_log_odds` weighs the
-solution against its clip-wide mirror image.
+hand prior and the temporal chains always have, and :func:`mirror_evidence` weighs the
+solution against its clip-wide mirror image. A solution's score and that weighing keep
+their terms per frame and source (:class:`handdb.lifting.evidence.Evidence`), so that the
+clip's log-odds count correlated frames once per independent frame.
 """
 
 from __future__ import annotations
@@ -28,6 +30,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from handdb.lifting.evidence import Evidence
 from handdb.lifting.hand_prior import FingerScores
 from handdb.lifting.temporal import acceleration_spread, sign_posterior
 from handdb.lifting.thumb_base import (
@@ -132,7 +135,7 @@ class Case:
         per sign and palm state; ``None`` without a thumb base.
     mirrored
         Whether palm state 1 stands for state 0's mirror image (plane fits): the clip-wide
-        mirror is then weighed by :func:`mirror_log_odds`. A template's two chiralities
+        mirror is then weighed by :func:`mirror_evidence`. A template's two chiralities
         are separate cases instead.
     shape_log_likelihood
         Nats: how well the case's palm shape fits the average hand's, once for the clip
@@ -167,9 +170,10 @@ class Settled:
         a thumb base.
     height, spread
         The clip's thumb-base height and spread, palm lengths (NaN without a thumb base).
-    score
-        Nats: anatomy of every frame's best finger states, the palm evidence of the chosen
-        tilts, the thumb base's log-likelihood with its prior, and the palm shape's.
+    evidence
+        The solution's log-likelihood: per frame, the anatomy of each finger's best states
+        (the other fingers, then the thumb), the palm evidence of the chosen tilt and the
+        thumb base's height; for the clip, the height's prior and the palm shape's.
     """
 
     state: np.ndarray
@@ -178,7 +182,12 @@ class Settled:
     thumb_log_odds: np.ndarray
     height: float
     spread: float
-    score: float
+    evidence: Evidence
+
+    @property
+    def score(self) -> float:
+        """Nats: the evidence summed, frames counted as independent."""
+        return self.evidence.total()
 
 
 @dataclass(frozen=True)
@@ -186,7 +195,7 @@ class _Tallies:
     """A case's votes summed once: the other fingers' and the thumb's per base sign."""
 
     others_vote: np.ndarray       # (T,): the other fingers' capped votes for state 0
-    others_anatomy: np.ndarray    # (T, 2)
+    others_anatomy: np.ndarray    # (T, 2, F - 1)
     thumb_evidence: np.ndarray    # (2, T, 2)
     thumb_anatomy: np.ndarray     # (2, T, 2)
 
@@ -196,7 +205,7 @@ class _Tallies:
         others = case.others
         vote = np.clip(others.evidence[:, 0] - others.evidence[:, 1], -FINGER_VOTE_CAP,
                        FINGER_VOTE_CAP).sum(axis=1)
-        return cls(others_vote=vote, others_anatomy=others.anatomy.sum(axis=2),
+        return cls(others_vote=vote, others_anatomy=others.anatomy,
                    thumb_evidence=np.stack([v.evidence[..., 0] for v in case.thumb]),
                    thumb_anatomy=np.stack([v.anatomy[..., 0] for v in case.thumb]))
 
@@ -257,7 +266,7 @@ def _settle_round(case: Case, tallies: _Tallies, palm_floor: float, thumb_floor:
                                acceleration_spread(chain[:, :, 0], np.array([palm_floor])))[:, 0]
     state = (tilt_odds < 0).astype(np.int64)
     thumb_odds = np.full(n_frames, np.nan)
-    thumb_ll = 0.0
+    thumb_ll, height_prior = np.zeros(n_frames), 0.0
     if height_ll is not None and case.thumb_dz is not None and case.heights is not None \
             and np.isfinite(height):
         chain = case.thumb_dz[:, frames, state].T[:, None, :, None]      # (T, 1, 2, 1)
@@ -267,14 +276,18 @@ def _settle_round(case: Case, tallies: _Tallies, palm_floor: float, thumb_floor:
         sign[frames, state] = (thumb_odds < 0).astype(np.int64)
         chosen = case.heights[sign[frames, state], frames, state]
         known = np.isfinite(chosen)
-        thumb_ll = float(np.sum(np.log(np.exp(log_normal(chosen[known], height, spread))
-                                       + outlier_density())) + log_prior(height))
-    anatomy = float(np.sum(tallies.others_anatomy[frames, state])
-                    + np.sum(tallies.thumb_anatomy[sign[frames, state], frames, state]))
-    palm = float(np.sum(np.where(state == 0, 0.5, -0.5) * case.evidence))
+        thumb_ll[known] = np.log(np.exp(log_normal(chosen[known], height, spread))
+                                 + outlier_density())
+        height_prior = float(log_prior(height))
+    frame_terms = np.column_stack([
+        tallies.others_anatomy[frames, state],
+        tallies.thumb_anatomy[sign[frames, state], frames, state],
+        np.where(state == 0, 0.5, -0.5) * case.evidence,
+        thumb_ll,
+    ])
     return Settled(state=state, tilt_log_odds=tilt_odds, thumb_sign=sign,
                    thumb_log_odds=thumb_odds, height=height, spread=spread,
-                   score=anatomy + palm + thumb_ll + case.shape_log_likelihood)
+                   evidence=Evidence(frame_terms, height_prior + case.shape_log_likelihood))
 
 
 def chosen_votes(case: Case, settled: Settled) -> tuple[np.ndarray, np.ndarray]:
@@ -315,18 +328,20 @@ def finger_signs(bone_log_odds: np.ndarray, chain_dz: np.ndarray,
     return odds.reshape(bone_log_odds.shape)
 
 
-def mirror_log_odds(case: Case, settled: Settled) -> float:
-    """Log-odds of a solution against its clip-wide mirror, for mirrored palm states.
+def mirror_evidence(case: Case, settled: Settled) -> Evidence:
+    """A solution's log-likelihood ratio against its clip-wide mirror, mirrored palm states.
 
     The mirror flips the tilt, the thumb base and every finger state at once; it changes
     the anatomy of the fingers (:attr:`Votes.mirror_gap`), the palm's evidence of each
-    frame and the thumb height's sign, which its prior weighs.
+    frame and the thumb height's sign, which its prior weighs. The sources are those of
+    :attr:`Settled.evidence`; the thumb base's height under the clip's is unchanged.
     """
     frames, state = np.arange(len(settled.state)), settled.state
     sign = settled.thumb_sign[frames, state]
     thumb_gap = np.stack([v.mirror_gap[frames, state, 0] for v in case.thumb])[sign, frames]
-    gap = float(np.sum(case.others.mirror_gap[frames, state]) + np.sum(thumb_gap)
-                + np.sum(np.where(state == 0, case.evidence, -case.evidence)))
-    if np.isfinite(settled.height):
-        gap += float(log_prior(settled.height) - log_prior(-settled.height))
-    return gap
+    frame_terms = np.column_stack([case.others.mirror_gap[frames, state], thumb_gap,
+                                   np.where(state == 0, case.evidence, -case.evidence),
+                                   np.zeros(len(frames))])
+    prior = float(log_prior(settled.height) - log_prior(-settled.height)) \
+        if np.isfinite(settled.height) else 0.0
+    return Evidence(frame_terms, prior)

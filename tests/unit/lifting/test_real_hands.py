@@ -125,8 +125,9 @@ def test_the_default_beats_the_thesis_on_depth_on_every_noisy_dhg_draw(dhg_mm, r
     request.applymarker(pytest.mark.xfail(strict=True, reason=(
         "on draw 7 the palm takes its other Necker pose in every frame (91.4 mm against the "
         "thesis's 57.2): the clip's summed finger anatomy prefers it, the thumb's by 850 "
-        "nats; capping each finger's lead per frame fixes this draw but flips three clips "
-        "of DHG's random views at 2 px instead")))
+        "nats. The clip is flagged (mirror_ambiguous), but choosing by the evidence over "
+        "independent frames, or capping each finger's lead per frame, fixes this draw and "
+        "flips clips of DHG's random views at 2 px instead")))
     skeleton = load_skeleton("dhg22")
     lengths = real_data.median_bone_lengths(dhg_mm, skeleton)
     clean, camera = dhg_view(dhg_mm, "orthographic")
@@ -143,6 +144,27 @@ def test_the_default_beats_the_thesis_on_depth_on_every_noisy_dhg_draw(dhg_mm, r
         if dz["kinematic"] > dz["thesis"]:
             losing[seed] = dz
     assert losing == {}
+
+
+def test_a_dhg_draw_lifted_in_its_other_necker_pose_is_flagged(dhg_mm):
+    """Nothing unsure is stored as settled: a clip whose depths are nearer the truth
+    mirrored (every root-relative depth negated) than as lifted must say its mirror is
+    ambiguous."""
+    skeleton = load_skeleton("dhg22")
+    lengths = real_data.median_bone_lengths(dhg_mm, skeleton)
+    clean, camera = dhg_view(dhg_mm, "orthographic")
+    truth = dhg_mm[..., 2] - dhg_mm[:, skeleton.root, None, 2]
+    unflagged = []
+    for noise_px in (2.0, 3.0, 4.0):
+        for seed in DHG_NOISE_SEEDS:
+            rng = np.random.default_rng([seed, int(round(10 * noise_px))])
+            uv = clean + rng.normal(scale=noise_px, size=clean.shape)
+            result = lift(uv, skeleton, lengths, camera, method="kinematic", hand="right")
+            depth = result.xyz[..., 2] - result.xyz[:, skeleton.root, None, 2]
+            flipped = np.mean(np.abs(depth - truth)) > np.mean(np.abs(depth + truth))
+            if flipped and not result.mirror_ambiguous:
+                unflagged.append((noise_px, seed))
+    assert unflagged == []
 
 
 def test_the_default_beats_the_thesis_on_depth_on_interhand(interhand_errors):
@@ -178,9 +200,25 @@ def population_clip(motion, camera, seed, hand):
 @pytest.mark.parametrize("seed", [0, 1, 2, 3])
 @pytest.mark.parametrize("motion", ["rapid", "random"])
 def test_hands_of_the_population_meet_the_orthographic_targets(motion, seed, hand):
-    summary, result = population_clip(motion, "orthographic", seed, hand)
+    summary, _ = population_clip(motion, "orthographic", seed, hand)
     assert summary["all"]["dz"] <= TARGET_DZ_MM
     assert summary["all"]["sign"] >= TARGET_SIGN_ACCURACY
+
+
+#: Clean population clips whose chirality only the palm's arch tells, weakly.
+WEAK_CHIRALITY = {("rapid", 0), ("random", 0)}
+
+
+@pytest.mark.parametrize("hand", ["right", "left"])
+@pytest.mark.parametrize("seed", [0, 1, 2, 3])
+@pytest.mark.parametrize("motion", ["rapid", "random"])
+def test_the_population_s_mirror_is_settled(motion, seed, hand, request):
+    if (motion, seed) in WEAK_CHIRALITY:
+        request.applymarker(pytest.mark.xfail(strict=True, reason=(
+            "the template's two chiralities score the fingers alike; the palm's fit prefers "
+            "the right one by 3-4 nats summed over 300 frames, under 1 nat over the clip's "
+            "independent frames: flagged as unsure, though the pose chosen is right")))
+    _, result = population_clip(motion, "orthographic", seed, hand)
     assert not result.mirror_ambiguous
 
 
