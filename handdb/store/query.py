@@ -1,12 +1,13 @@
 """DuckDB over the database: one view per table, named like the table.
 
-Each table's view scans an Arrow dataset of the table's Parquet files, listed when the
-connection is made (a folder listing, never a glob: a database path may hold pattern
-characters); the files are read in place, lazily, in the table's contract schema. A table
-with no file yet is an empty view with the contract's columns, so every query that names a
-table works on any database. A file that is not readable Parquet (cut short, overwritten)
-is left out of its view with a :class:`~handdb.errors.DamagedFileWarning` naming it, so one
-damaged file never makes a whole table unreadable; the next build writes it again. Derived
+Each table's view scans a :class:`ParquetScan` of the table's Parquet files, listed when
+the connection is made (a folder listing, never a glob: a database path may hold pattern
+characters); the files are read in place, each time a statement scans the view, in the
+table's contract schema. A table with no file yet is an empty view with the contract's
+columns, so every query that names a table works on any database. A file that is not
+readable Parquet (cut short, overwritten) is left out of its view with a
+:class:`~handdb.errors.DamagedFileWarning` naming it, so one damaged file never makes a
+whole table unreadable; the next build writes it again. Derived
 views in ``schemas/views/*.sql`` are created after the table views and the macros of
 :func:`macro_statements`: ``mm_per_unit(units)``, which the ``*_mm`` views use to put every
 clip's lengths in millimetres, and ``finger_rank(finger)``, to list fingers in anatomical
@@ -17,16 +18,25 @@ own settings once the views exist: external access is off, so no statement reads
 any file (``COPY ... TO``, ``ATTACH``, ``EXPORT DATABASE``, ``read_csv``, extensions), and
 the configuration is locked, so no statement turns it back on. DuckDB's catalog lives in
 memory: a statement may create a table there, never a file.
+
+The files are read by Arrow, not by DuckDB's own ``read_parquet``: a view over
+``read_parquet`` opens its files when a statement runs, which the seal forbids, and
+DuckDB's ``allowed_paths``, which would let it, lets ``COPY ... TO`` overwrite those very
+files. Nor through ``pyarrow.dataset``, whose import loads pandas (half a second of
+``handdb sql``'s start): a :class:`ParquetScan` gives DuckDB the Arrow stream protocol over
+``pyarrow.parquet`` readers. DuckDB then reads every column of a table it scans and
+projects afterwards.
 """
 
 from __future__ import annotations
 
 import warnings
+from collections.abc import Iterator
 from functools import cache
+from typing import Any
 
 import duckdb
 import pyarrow as pa
-import pyarrow.dataset as ds
 import pyarrow.fs as pafs
 import pyarrow.parquet as pq
 
@@ -54,18 +64,55 @@ def arrow_filesystem(store: Store) -> pafs.FileSystem:
     return pafs.PyFileSystem(pafs.FSSpecHandler(store.fs))
 
 
-def table_rows(store: Store, table: str) -> ds.Dataset | pa.Table:
-    """The committed rows of ``table``: a dataset over its readable files, or an empty table.
+class ParquetScan:
+    """The rows of some Parquet files in one schema, as an Arrow stream made anew per scan.
+
+    DuckDB scans any object with the Arrow PyCapsule stream protocol
+    (``__arrow_c_stream__``) and asks it for a fresh stream each time a statement reads
+    the view made from it, so a view over a scan reads the files at that moment.
+
+    Parameters
+    ----------
+    files
+        Paths of the Parquet files on ``filesystem``, read in this order.
+    schema
+        The schema of the rows: the files' columns of these names, cast to its types.
+    filesystem
+        Where the files are.
+    """
+
+    def __init__(self, files: list[str], schema: pa.Schema,
+                 filesystem: pafs.FileSystem) -> None:
+        self.files = tuple(files)
+        self.schema = schema
+        self.filesystem = filesystem
+
+    def batches(self) -> Iterator[pa.RecordBatch]:
+        """Every file's record batches in turn, in :attr:`schema`."""
+        for path in self.files:
+            reader = pq.ParquetFile(path, filesystem=self.filesystem)
+            for batch in reader.iter_batches(columns=self.schema.names):
+                yield batch.cast(self.schema)
+
+    def __arrow_c_schema__(self) -> Any:
+        """The rows' schema, as an Arrow C schema capsule."""
+        return self.schema.__arrow_c_schema__()
+
+    def __arrow_c_stream__(self, requested_schema: Any = None) -> Any:
+        """A new stream of the rows, as an Arrow C stream capsule."""
+        reader = pa.RecordBatchReader.from_batches(self.schema, self.batches())
+        return reader.__arrow_c_stream__(requested_schema)
+
+
+def table_rows(store: Store, table: str) -> ParquetScan:
+    """The committed rows of ``table``: a scan of its readable files, in its contract schema.
 
     A file whose Parquet footer does not read is left out, with a
     :class:`~handdb.errors.DamagedFileWarning` naming it.
     """
     filesystem = arrow_filesystem(store)
     files = [path for path in store.table_files(table) if _readable(store, path, filesystem)]
-    if not files:
-        return tables.empty(table)
-    return ds.dataset(files, schema=tables.schema(table), format="parquet",
-                      filesystem=filesystem)
+    return ParquetScan(files, tables.schema(table), filesystem)
 
 
 def _readable(store: Store, path: str, filesystem: pafs.FileSystem) -> bool:

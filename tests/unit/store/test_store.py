@@ -108,6 +108,18 @@ def test_views_exist_for_every_table_even_when_empty(tmp_path):
         assert con.sql("SELECT sum(x) FROM truth_3d").fetchall() == [(3.0,)]
 
 
+def test_a_view_reads_its_files_at_every_scan(tmp_path):
+    store = Store(str(tmp_path / "db"))
+    store.write("truth_3d", "a", truth_rows("a", 3))
+    with connect(store, read_only=True) as con:
+        scan = "SELECT clip_id, count(*), sum(x) FROM truth_3d GROUP BY ALL ORDER BY ALL"
+        assert con.sql(scan).fetchall() == con.sql(scan).fetchall() == [("a", 3, 3.0)]
+        store.write("truth_3d", "a", truth_rows("a", 5))
+        assert con.sql(scan).fetchall() == [("a", 5, 10.0)]
+        assert con.sql("SELECT typeof(frame), typeof(x) FROM truth_3d LIMIT 1").fetchall() == \
+            [("INTEGER", "DOUBLE")]
+
+
 def test_remote_filesystem_url(tmp_path):
     store = Store("memory://handdb-test-db")
     store.commit_clip("a", {"clips": clip_row("a"), "truth_3d": truth_rows("a", 4)})
