@@ -1,10 +1,12 @@
 """``handdb lift compare``: every lifting method on one clip, set out like Table 4.1.
 
 The clip comes from an inbox (``--inbox`` and ``--clip``; its sidecar must give the bone
-lengths) or is synthesized (``--synthetic rapid``, or ``--synthetic thesis`` for the
-thesis's 100-frame clench). With ground truth the command prints, per method, the mean
-root-relative ``|dZ|``, the bone-sign accuracy and the MPJPE, then the per-joint mean
-``|dZ|``; ``--chart`` also writes the comparison as a PNG.
+lengths), gap filled as the build fills it (:func:`handdb.build.stages.fill`: the sidecar's
+method, and a clip of independent images, such as DeepLabCut labelled data, filled and
+lifted image by image, never as a time series), or is synthesized (``--synthetic rapid``,
+or ``--synthetic thesis`` for the thesis's 100-frame clench). With ground truth the command
+prints, per method, the mean root-relative ``|dZ|``, the bone-sign accuracy and the MPJPE,
+then the per-joint mean ``|dZ|``; ``--chart`` also writes the comparison as a PNG.
 """
 
 from __future__ import annotations
@@ -12,12 +14,13 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Annotated
 
-import numpy as np
 import typer
 from rich.console import Console
 from rich.table import Table
 
-from handdb.clip import Camera
+from handdb.build.options import BuildOptions
+from handdb.build.stages import ClipResult, fill
+from handdb.clip import VIDEO, Camera
 from handdb.errors import InputError
 from handdb.hand.skeletons import Skeleton, bone_length_array, load_skeleton
 from handdb.ingest.inbox import discover, load_clip
@@ -47,10 +50,10 @@ def _inbox_clip(inbox: Path, clip_id: str):
     if not clip.spec.bone_lengths:
         raise InputError(clip.spec.path, "gives no bone lengths; add them to compare lifts "
                          "outside a build", field="bone_lengths")
-    uv = np.where(clip.observed[..., None], clip.uv, np.nan)
-    return (clip.clip_id, uv, clip.skeleton,
+    filled = fill(ClipResult(clip=clip), BuildOptions())
+    return (clip.clip_id, filled.uv, clip.skeleton,
             bone_length_array(clip.skeleton, clip.spec.bone_lengths), clip.spec.camera,
-            clip.spec.hand, clip.truth, clip.spec.units)
+            clip.spec.hand, clip.truth, clip.spec.units, clip.sampling)
 
 
 def _synthetic_clip(motion: str, camera: str, seed: int):
@@ -60,7 +63,7 @@ def _synthetic_clip(motion: str, camera: str, seed: int):
     cam = Camera(**clip.camera) if clip.camera["model"] == "pinhole" else Camera()
     return (f"{motion}-{camera}-{seed}", clip.uv, skeleton,
             bone_length_array(skeleton, clip.bone_lengths), cam, clip.hand, clip.xyz,
-            clip.units)
+            clip.units, VIDEO)
 
 
 def _number(value: float | None) -> str:
@@ -102,13 +105,14 @@ def compare(
 ) -> None:
     """Lift one clip with every method and compare them with its ground truth."""
     if synthetic is not None:
-        clip_id, uv, skeleton, lengths, cam, hand, truth, units = _synthetic_clip(
+        clip_id, uv, skeleton, lengths, cam, hand, truth, units, sampling = _synthetic_clip(
             synthetic, camera, seed)
     elif inbox is not None and clip is not None:
-        clip_id, uv, skeleton, lengths, cam, hand, truth, units = _inbox_clip(inbox, clip)
+        clip_id, uv, skeleton, lengths, cam, hand, truth, units, sampling = _inbox_clip(
+            inbox, clip)
     else:
         raise typer.BadParameter("give --inbox and --clip, or --synthetic")
-    results = {m: lift(uv, skeleton, lengths, cam, method=m, hand=hand)
+    results = {m: lift(uv, skeleton, lengths, cam, method=m, hand=hand, sampling=sampling)
                for m in available_methods()}
     for method, result in results.items():
         if result.note:

@@ -1,17 +1,26 @@
-"""Convert a handdb glTF binary to FBX inside Blender; run by :mod:`handdb.export.fbx`.
+"""Convert handdb glTF binaries to FBX inside Blender; run by :mod:`handdb.export.fbx`.
 
 Runs under Blender's Python, never imported by handdb::
 
-    blender --background --factory-startup --python blender_fbx.py -- IN.glb OUT.fbx FPS N ID
-    python blender_fbx.py IN.glb OUT.fbx FPS N ID      # a Python with the bpy module
+    blender --background --factory-startup --python blender_fbx.py -- BATCH.json
+    python blender_fbx.py BATCH.json      # a Python with the bpy module
 
-Imports the glTF at the clip's frame rate (Blender converts its seconds to frames at the
-scene's rate), so the armature's action spans frames ``0 .. N - 1``, then exports the
-armature and its skinned mesh (not the bone display shapes the importer adds) as binary
-FBX: Y up, -Z forward, the animation baked into a take named after the clip ``ID``, no leaf
-bones added, lengths in FBX's centimetres (the scene is in metres).
+``BATCH.json`` is ``{"conversions": [...], "failures": FAILURES.json}``, each conversion
+``{"source": IN.glb, "target": OUT.fbx, "fps": FPS, "n_frames": N, "clip_id": ID}``; one
+Blender process converts them all, in turn, so its start-up is paid once per batch. A
+conversion that fails does not stop the next; ``FAILURES.json`` is written at the end, an
+object of clip id -> the error (empty when every file was written), and the exit status
+is 1 when any failed.
+
+Each glTF is imported, into an empty scene, at the clip's frame rate (Blender converts its
+seconds to frames at the scene's rate), so the armature's action spans frames
+``0 .. N - 1``, then the armature and its skinned mesh (not the bone display shapes the
+importer adds) are exported as binary FBX: Y up, -Z forward, the animation baked into a
+take named after the clip ``ID``, no leaf bones added, lengths in FBX's centimetres (the
+scene is in metres).
 """
 
+import json
 import sys
 
 import bpy
@@ -36,6 +45,22 @@ def convert(source: str, target: str, fps: float, n_frames: int, clip_id: str) -
                              axis_forward="-Z", axis_up="Y", apply_unit_scale=True)
 
 
+def convert_batch(batch: str) -> int:
+    """Convert every conversion of the batch file ``batch``; return how many failed."""
+    with open(batch) as handle:
+        listed = json.load(handle)
+    failures = {}
+    for entry in listed["conversions"]:
+        try:
+            convert(entry["source"], entry["target"], float(entry["fps"]),
+                    int(entry["n_frames"]), entry["clip_id"])
+        except Exception as error:  # noqa: BLE001 - reported by clip; the others still run
+            failures[entry["clip_id"]] = f"{type(error).__name__}: {' '.join(str(error).split())}"
+    with open(listed["failures"], "w") as handle:
+        json.dump(failures, handle)
+    return len(failures)
+
+
 if __name__ == "__main__":
     arguments = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else sys.argv[1:]
-    convert(arguments[0], arguments[1], float(arguments[2]), int(arguments[3]), arguments[4])
+    sys.exit(1 if convert_batch(arguments[0]) else 0)

@@ -2,8 +2,9 @@
 
 There is no open FBX SDK; Blender's FBX exporter is the well-kept open writer. The clip is
 written as glTF (:func:`handdb.export.gltf.export_clip_gltf`: the same armature, skinned
-mesh and animation) into a temporary folder, and Blender, run as a separate process,
-imports it and exports binary FBX (:mod:`handdb.export.blender_fbx`): Y up, one armature
+mesh and animation) into a temporary folder, and Blender, run as a separate process (one
+for a whole batch of clips: its start-up is most of a clip's cost), imports it and exports
+binary FBX (:mod:`handdb.export.blender_fbx`): Y up, one armature
 with a bone per joint, the skinned hand mesh, the animation baked on frames ``0 .. T - 1``
 at the clip's fps into a take named after the clip, lengths in centimetres as FBX expects.
 
@@ -20,10 +21,13 @@ Python with Blender's ``bpy`` module, ``pip install bpy``), then as ``blender`` 
 
 from __future__ import annotations
 
+import json
 import os
 import shutil
 import subprocess
 import tempfile
+from collections.abc import Sequence
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -37,11 +41,15 @@ FBX_SUFFIX = ".fbx"
 #: Environment variable naming Blender: an executable, or a Python with ``bpy``.
 BLENDER_VARIABLE = "HANDDB_BLENDER"
 
-#: Seconds a conversion may take; a few seconds per clip on two cores, most of it start-up.
+#: Seconds Blender may take per clip of a batch; a few seconds per clip on two cores, most
+#: of it Blender's start-up, paid once per batch.
 BLENDER_TIMEOUT_S = 600.0
 
 #: The script Blender runs.
 CONVERTER = Path(__file__).with_name("blender_fbx.py")
+
+#: Name prefix of the temporary folder beside the output where files are staged.
+STAGING_PREFIX = ".fbx-export-"
 
 #: Lines of Blender's output quoted when it fails.
 QUOTED_LINES = 15
@@ -81,6 +89,91 @@ def _script_arguments(command: list[str], arguments: list[str]) -> list[str]:
                                                                     *arguments]
 
 
+@dataclass(frozen=True)
+class FbxConversion:
+    """A clip's glTF file that Blender converts to FBX.
+
+    Attributes
+    ----------
+    clip_id
+        The clip, naming the FBX take.
+    source
+        The glTF binary (:func:`~handdb.export.gltf.export_clip_gltf`, rigid bones).
+    target
+        Where Blender writes the FBX file.
+    fps
+        The clip's frame rate, frames per second.
+    n_frames
+        The clip's frames ``T``.
+    """
+
+    clip_id: str
+    source: Path
+    target: Path
+    fps: float
+    n_frames: int
+
+
+def stage_gltf(folder: Path, name: str, *, clip_id: str, skeleton: Skeleton, xyz: np.ndarray,
+               bone_lengths: np.ndarray, fps: float, units: str, hand: str) -> FbxConversion:
+    """Write a clip's glTF into ``folder`` for Blender to convert to ``folder/<name>.fbx``.
+
+    The motion's parameters are those of :func:`handdb.export.gltf.export_clip_gltf`
+    (``xyz`` ``(T, J, 3) float64``, ``units``); bones always keep their lengths.
+    """
+    source = export_clip_gltf(folder / f"{name}.glb", clip_id=clip_id, skeleton=skeleton,
+                              xyz=xyz, bone_lengths=bone_lengths, fps=fps, units=units,
+                              hand=hand, keep_lengths=True)
+    return FbxConversion(clip_id=clip_id, source=source, target=folder / f"{name}{FBX_SUFFIX}",
+                         fps=float(fps), n_frames=len(xyz))
+
+
+def convert_to_fbx(conversions: Sequence[FbxConversion]) -> dict[str, str]:
+    """Convert glTF files to FBX in one Blender process (its start-up is paid once).
+
+    Parameters
+    ----------
+    conversions
+        What to convert; each target's folder must exist.
+
+    Returns
+    -------
+    dict
+        Clip id -> why Blender wrote no FBX file for it, for every conversion that failed
+        (empty when all were written); a failure of one clip leaves the others' files.
+
+    Raises
+    ------
+    MissingToolError
+        If Blender is not installed (the message says how to get it).
+    StageError
+        If Blender did not finish within :data:`BLENDER_TIMEOUT_S` seconds per clip.
+    """
+    if not conversions:
+        return {}
+    command = blender_command()
+    with tempfile.TemporaryDirectory(prefix="handdb-fbx-") as tmp:
+        listed, reported = Path(tmp) / "batch.json", Path(tmp) / "failures.json"
+        listed.write_text(json.dumps({"failures": str(reported), "conversions": [
+            {"source": str(c.source), "target": str(c.target), "fps": c.fps,
+             "n_frames": c.n_frames, "clip_id": c.clip_id} for c in conversions]}))
+        try:
+            run = subprocess.run([*command, *_script_arguments(command, [str(listed)])],
+                                 capture_output=True, text=True, check=False,
+                                 timeout=BLENDER_TIMEOUT_S * len(conversions))
+        except subprocess.TimeoutExpired:
+            raise StageError(
+                "Blender did not finish the FBX conversion of "
+                f"{', '.join(c.clip_id for c in conversions)} in "
+                f"{BLENDER_TIMEOUT_S * len(conversions):g} s") from None
+        reasons = json.loads(reported.read_text()) if reported.is_file() else {}
+    tail = "\n".join((run.stdout + run.stderr).strip().splitlines()[-QUOTED_LINES:])
+    return {c.clip_id: reasons.get(c.clip_id) or (
+                f"Blender ({command[0]}, exit status {run.returncode}) wrote no FBX "
+                f"file:\n{tail}")
+            for c in conversions if not c.target.is_file()}
+
+
 def export_clip_fbx(
     path: str | Path,
     *,
@@ -96,7 +189,8 @@ def export_clip_fbx(
 
     Parameters are those of :func:`handdb.export.gltf.export_clip_gltf` (bones always keep
     their lengths); ``path`` ends in ``.fbx``, its folder must exist, and an existing file
-    is replaced atomically.
+    is replaced atomically. Many clips are converted in one Blender process by
+    :func:`stage_gltf` and :func:`convert_to_fbx`.
 
     Returns
     -------
@@ -109,28 +203,19 @@ def export_clip_fbx(
         If Blender is not installed (the message says how to get it).
     ParameterError, StageError
         As :func:`~handdb.export.gltf.export_clip_gltf`; ``StageError`` also when Blender
-        fails, quoting its last lines.
+        fails, quoting its error.
     """
     path = Path(path)
     if path.suffix != FBX_SUFFIX:
         raise ParameterError(f"{path}: the suffix must be {FBX_SUFFIX}")
-    command = blender_command()
-    with tempfile.TemporaryDirectory(dir=path.parent, prefix=".fbx-export-") as tmp:
-        source = export_clip_gltf(Path(tmp) / f"{path.stem}.glb", clip_id=clip_id,
-                                  skeleton=skeleton, xyz=xyz, bone_lengths=bone_lengths,
-                                  fps=fps, units=units, hand=hand, keep_lengths=True)
-        written = Path(tmp) / path.name
-        arguments = [str(source), str(written), repr(float(fps)), str(len(xyz)), clip_id]
-        try:
-            run = subprocess.run([*command, *_script_arguments(command, arguments)],
-                                 capture_output=True, text=True, timeout=BLENDER_TIMEOUT_S,
-                                 check=False)
-        except subprocess.TimeoutExpired:
-            raise StageError(f"{path}: Blender did not finish the FBX conversion in "
-                             f"{BLENDER_TIMEOUT_S:g} s") from None
-        if run.returncode != 0 or not written.is_file():
-            tail = "\n".join((run.stdout + run.stderr).strip().splitlines()[-QUOTED_LINES:])
-            raise StageError(f"{path}: Blender ({command[0]}) could not convert the clip to "
-                             f"FBX (exit status {run.returncode}):\n{tail}")
-        os.replace(written, path)
+    blender_command()
+    with tempfile.TemporaryDirectory(dir=path.parent, prefix=STAGING_PREFIX) as tmp:
+        conversion = stage_gltf(Path(tmp), path.stem, clip_id=clip_id, skeleton=skeleton,
+                                xyz=xyz, bone_lengths=bone_lengths, fps=fps, units=units,
+                                hand=hand)
+        failed = convert_to_fbx([conversion])
+        if failed:
+            raise StageError(f"{path}: Blender could not convert the clip to FBX: "
+                             f"{failed[clip_id]}")
+        os.replace(conversion.target, path)
     return path

@@ -7,18 +7,23 @@ function, imported only when a file is written, so listing the formats (``handdb
 
 A writer is called as ``write(motion, path, options)`` with a
 :class:`~handdb.export.stored.StoredMotion`, the output path (its folder exists) and an
-:class:`ExportOptions`, and returns the path it wrote.
+:class:`ExportOptions`, and returns the path it wrote. A format whose writer pays a large
+start-up per call (FBX starts Blender) also names a batch writer, called as
+``write_batch(jobs, out_dir, options)`` with an iterable of ``(motion, path)`` pairs (the
+paths in ``out_dir``, which exists); it yields a
+:class:`~handdb.export.stored.ClipExport` per file written and, when some clips failed,
+raises :class:`~handdb.errors.StageError` naming them after the others are written.
 """
 
 from __future__ import annotations
 
-import importlib
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 from handdb.errors import ParameterError
+from handdb.lazy import LazyFunction
 from handdb.registry import Registry
 
 
@@ -66,6 +71,9 @@ class ExportFormat:
     posed
         ``True`` when the format holds joint rotations, which need every joint of every
         frame placed; ``False`` when missing positions are written as missing.
+    batch_writer
+        ``"module:function"`` of a writer of many clips at once (see the module doc), or
+        ``None`` when clips are written one by one.
     """
 
     name: str
@@ -74,6 +82,7 @@ class ExportFormat:
     description: str
     opens_in: str
     posed: bool
+    batch_writer: str | None = None
 
     @property
     def suffix(self) -> str:
@@ -82,9 +91,16 @@ class ExportFormat:
 
     def load(self) -> Callable[..., Path]:
         """Import and return the writer."""
-        module, function = self.writer.split(":")
-        writer: Any = getattr(importlib.import_module(module), function)
-        return writer
+        return _imported(self.writer)
+
+    def load_batch(self) -> Callable[..., Iterator[Any]] | None:
+        """Import and return the batch writer, ``None`` when the format has none."""
+        return None if self.batch_writer is None else _imported(self.batch_writer)
+
+
+def _imported(target: str) -> Any:
+    """The function ``target`` (``"module:function"``) names, its module imported now."""
+    return LazyFunction(target).function
 
 
 #: Every export format, registered in :mod:`handdb.export`.

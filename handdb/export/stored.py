@@ -10,13 +10,15 @@ file of that format is written.
 
 from __future__ import annotations
 
-from collections.abc import Iterator
+import os
+import tempfile
+from collections.abc import Iterable, Iterator
 from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
 
-from handdb.errors import ParameterError, StoreError
+from handdb.errors import ParameterError, StageError, StoreError
 from handdb.export import placement
 from handdb.export.clip_checks import unplaced_frames
 from handdb.export.formats import FORMATS, ExportFormat, ExportOptions, format_for_suffix
@@ -124,6 +126,46 @@ def write_fbx(motion: StoredMotion, path: Path, options: ExportOptions) -> Path:
                            units=motion.units, hand=motion.hand)
 
 
+def write_fbx_batch(jobs: Iterable[tuple[StoredMotion, Path]], out_dir: Path,
+                    options: ExportOptions) -> Iterator[ClipExport]:
+    """Write each ``(motion, path)`` of ``jobs`` as FBX, converted by one Blender process.
+
+    Each clip's glTF is staged in a temporary folder in ``out_dir`` as it comes (one clip's
+    motion in memory at a time), then Blender converts them all and each FBX file is moved
+    to its path; rigid bones.
+
+    Yields
+    ------
+    ClipExport
+        One per file written.
+
+    Raises
+    ------
+    MissingToolError
+        If Blender is not installed (before anything is written).
+    StageError
+        After the other clips' files are written, naming each clip Blender could not
+        convert and why.
+    """
+    from handdb.export.fbx import STAGING_PREFIX, blender_command, convert_to_fbx, stage_gltf
+
+    blender_command()
+    with tempfile.TemporaryDirectory(dir=out_dir, prefix=STAGING_PREFIX) as tmp:
+        staged = [(stage_gltf(Path(tmp), f"{index}", clip_id=motion.clip_id,
+                              skeleton=motion.skeleton, xyz=motion.xyz,
+                              bone_lengths=motion.bone_lengths, fps=motion.fps,
+                              units=motion.units, hand=motion.hand), path)
+                  for index, (motion, path) in enumerate(jobs)]
+        failed = convert_to_fbx([conversion for conversion, _ in staged])
+        for conversion, path in staged:
+            if conversion.clip_id not in failed:
+                os.replace(conversion.target, path)
+                yield ClipExport(conversion.clip_id, path)
+    if failed:
+        raise StageError("Blender could not convert to FBX: " + "; ".join(
+            f"clip {clip_id}: {reason}" for clip_id, reason in failed.items()))
+
+
 def write_trc(motion: StoredMotion, path: Path, options: ExportOptions) -> Path:
     """Write ``motion``'s joint positions as TRC (:mod:`handdb.export.trc`)."""
     from handdb.export.trc import export_clip_trc
@@ -140,12 +182,18 @@ def write_c3d(motion: StoredMotion, path: Path, options: ExportOptions) -> Path:
                            units=motion.units)
 
 
+def placed_motion(entry: ExportFormat, motion: StoredMotion, options: ExportOptions
+                  ) -> StoredMotion:
+    """``motion`` where a file of format ``entry`` puts it (see ``options.at_origin``)."""
+    if options.places_at_origin(entry):
+        return replace(motion, xyz=placement.at_origin(motion.xyz, motion.skeleton))
+    return motion
+
+
 def _write(entry: ExportFormat, motion: StoredMotion, out: Path,
            options: ExportOptions) -> Path:
     out.parent.mkdir(parents=True, exist_ok=True)
-    if options.places_at_origin(entry):
-        motion = replace(motion, xyz=placement.at_origin(motion.xyz, motion.skeleton))
-    return entry.load()(motion, out, options)
+    return entry.load()(placed_motion(entry, motion, options), out, options)
 
 
 def export_stored_clip(
@@ -233,10 +281,14 @@ def export_stored_clips(
     Yields
     ------
     ClipExport
-        One per clip, as it is written or skipped.
+        One per clip, as it is written or skipped; a format with a batch writer (FBX)
+        writes every file at once, then reports the clips it skipped.
 
     Raises
     ------
+    StageError
+        When the batch writer could not write some clips: after the others' files are
+        written and reported, naming each clip.
     UnknownNameError
         If ``format_name`` is not a format; the message lists those that are (raised before
         anything is read).
@@ -259,6 +311,39 @@ def export_stored_clips(
         raise StoreError(f"database {store.url} has no clip {', '.join(map(repr, unknown))}; "
                          "the clips are listed by handdb sql 'SELECT clip_id FROM clips'")
     options = options or ExportOptions()
+    motions = _exportable(db, entry, clip_ids)
+    write_batch = entry.load_batch()
+    if write_batch is None:
+        for item in motions:
+            yield item if isinstance(item, ClipExport) else ClipExport(item.clip_id, _write(
+                entry, item, out_dir / f"{item.clip_id}{entry.suffix}", options))
+        return
+    skipped: list[ClipExport] = []
+
+    def jobs() -> Iterator[tuple[StoredMotion, Path]]:
+        for item in motions:
+            if isinstance(item, ClipExport):
+                skipped.append(item)
+            else:
+                yield (placed_motion(entry, item, options),
+                       out_dir / f"{item.clip_id}{entry.suffix}")
+
+    out_dir.mkdir(parents=True, exist_ok=True)
+    try:
+        yield from write_batch(jobs(), out_dir, options)
+    except StageError:
+        yield from skipped
+        raise
+    yield from skipped
+
+
+def _exportable(db: str, entry: ExportFormat, clip_ids: list[str]
+                ) -> Iterator[StoredMotion | ClipExport]:
+    """Each clip's stored motion, in turn, or why it is skipped.
+
+    A clip a posed format cannot take (frames with joints gap filling could not place) is
+    skipped, and so is a clip whose motion is not in the database.
+    """
     for clip_id in clip_ids:
         try:
             motion = read_stored_motion(db, clip_id)
@@ -271,5 +356,4 @@ def export_stored_clips(
                 f"filling could not place, and {entry.name} needs every joint posed; "
                 "TRC and C3D write them as missing"))
             continue
-        yield ClipExport(clip_id, _write(entry, motion, out_dir / f"{clip_id}{entry.suffix}",
-                                         options))
+        yield motion

@@ -12,12 +12,14 @@ import json
 
 import numpy as np
 import pytest
+from typer.testing import CliRunner
 
 from handdb.build import BuildOptions, build_in_process
+from handdb.cli import lift as lift_command
 from handdb.clip import IMAGES, VIDEO
 from handdb.gapfill import fill_gaps
 from handdb.hand.skeletons import bone_length_array, load_skeleton
-from handdb.ingest import discover, dlc, load_clip
+from handdb.ingest import discover, dlc, get_format, load_clip
 from handdb.lifting import lift
 from handdb.store.query import query
 from handdb.synthetic.clips import synthesize_clip
@@ -26,6 +28,8 @@ from tests.unit.ingest.test_real_tools import BRICE_MAP, SIDECAR_2D, put
 #: Images picked from a synthetic clip, in the order a labeller might list them.
 N_IMAGES, SEED = 16, 4
 DIPS = ("index_dip", "middle_dip", "ring_dip", "little_dip")
+#: The lifting methods ``handdb lift compare`` is run with here.
+FAST_METHODS = ("kinematic", "kinematic-refined", "thesis")
 
 
 @pytest.fixture(scope="module")
@@ -124,3 +128,24 @@ def test_the_real_labelled_hands_build_plausible(real_tools, tmp_path, individua
     assert row == [{"n_frames": 20, "sampling": IMAGES, "flagged": False, "flag_reasons": []}]
     placed = query(db, "SELECT count(*) AS n FROM joints_3d WHERE isfinite(z)").to_pylist()
     assert placed == [{"n": 20 * 21}]
+
+
+def test_lift_compare_fills_and_lifts_each_labelled_image_on_its_own(tmp_path, labelled,
+                                                                     monkeypatch):
+    """As the build does: the comparison of an inbox's labelled images is the same in any
+    order of the images (each image's depth is its own, never tied to the next one's)."""
+    # the model fit takes seconds per image; the fast methods show the sampling is kept
+    monkeypatch.setattr(lift_command, "available_methods", lambda: FAST_METHODS)
+    clip, picked, uv = labelled
+    skeleton = load_skeleton(clip.skeleton)
+    printed = {}
+    for name, order in (("listed", slice(None)), ("reversed", slice(None, None, -1))):
+        inbox = inbox_with(tmp_path / name, clip, uv[order], picked[order])
+        get_format("truth_csv").write(inbox / "hand.truth.csv", clip.xyz[picked[order]],
+                                      skeleton)
+        result = CliRunner().invoke(lift_command.app, ["compare", "--inbox", str(inbox),
+                                                       "--clip", "hand"], terminal_width=200)
+        assert result.exit_code == 0, result.output
+        printed[name] = result.output
+    assert "hand: depth against ground truth" in printed["listed"]
+    assert printed["reversed"] == printed["listed"]

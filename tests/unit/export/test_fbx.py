@@ -6,6 +6,7 @@ from typer.testing import CliRunner
 
 from handdb.cli import app
 from handdb.errors import MissingToolError, ParameterError
+from handdb.export import fbx
 from handdb.export.fbx import BLENDER_VARIABLE, blender_command, export_clip_fbx
 from handdb.hand.skeletons import load_skeleton
 from tests.integration.cli.test_export_cli import write_database
@@ -69,3 +70,31 @@ def test_the_command_reports_missing_blender(no_blender, tmp_path):
     assert result.exit_code == 1
     assert "error: FBX export runs Blender, which was not found" in result.stderr
     assert not any((tmp_path / "out").glob("*"))
+
+
+def test_a_batch_is_one_conversion_and_a_failed_clip_is_named_after_the_others(
+        monkeypatch, tmp_path):
+    program = tmp_path / "blender"
+    program.write_text("")
+    monkeypatch.setenv(BLENDER_VARIABLE, str(program))
+    batches = []
+
+    def convert(conversions):
+        """Blender as the converter's report describes it: bravo fails, the rest are written."""
+        batches.append([c.clip_id for c in conversions])
+        for conversion in conversions:
+            if conversion.clip_id != "bravo":
+                conversion.target.write_bytes(conversion.source.read_bytes())
+        return {"bravo": "RuntimeError: Bad glTF"}
+
+    monkeypatch.setattr(fbx, "convert_to_fbx", convert)
+    for seed, clip_id in enumerate(("alpha", "bravo", "charlie")):
+        motion = make_hinge_motion(load_skeleton("mediapipe21"), n_frames=4, seed=seed)
+        db = write_database(tmp_path / "db", motion, clip_id=clip_id)
+    out = tmp_path / "out"
+    result = CliRunner().invoke(app, ["export", "--db", db, "--format", "fbx", "--out", str(out)])
+    assert batches == [["alpha", "bravo", "charlie"]]
+    assert result.exit_code == 1
+    assert result.stdout.split() == [str(out / "alpha.fbx"), str(out / "charlie.fbx")]
+    assert "clip bravo: RuntimeError: Bad glTF" in result.stderr
+    assert sorted(p.name for p in out.iterdir()) == ["alpha.fbx", "charlie.fbx"]

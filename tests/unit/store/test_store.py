@@ -1,4 +1,5 @@
 import multiprocessing
+from importlib import import_module
 
 import pyarrow.parquet as pq
 import pytest
@@ -8,6 +9,9 @@ from handdb.store import tables
 from handdb.store.database import CLIP_TABLES, Store
 from handdb.store.query import connect, query
 from tests.support.store_rows import clip_row, truth_rows
+
+#: The module itself (``handdb.store.query`` the attribute is its function ``query``).
+query_module = import_module("handdb.store.query")
 
 
 def test_commit_clip_writes_tables_and_marks_completion(tmp_path):
@@ -106,6 +110,24 @@ def test_views_exist_for_every_table_even_when_empty(tmp_path):
         assert {"clip_summary", "depth_error"} <= names
         assert con.sql("SELECT count(*) FROM joints_3d").fetchall() == [(0,)]
         assert con.sql("SELECT sum(x) FROM truth_3d").fetchall() == [(3.0,)]
+
+
+@pytest.mark.parametrize("pruned_from", [query_module.PRUNED_SCAN_BYTES, 0],
+                         ids=["parquet-scan", "pyarrow-dataset"])
+def test_a_view_gives_the_same_rows_at_every_scan_either_way_it_reads(tmp_path, monkeypatch,
+                                                                      pruned_from):
+    monkeypatch.setattr(query_module, "PRUNED_SCAN_BYTES", pruned_from)
+    store = Store(str(tmp_path / "db"))
+    store.write("truth_3d", "a", truth_rows("a", 3))
+    store.write("truth_3d", "b", truth_rows("b", 2, offset=10.0))
+    rows = query_module.table_rows(store, "truth_3d")
+    assert isinstance(rows, query_module.ParquetScan) == (pruned_from > 0)
+    with connect(store, read_only=True) as con:
+        scan = "SELECT clip_id, count(*), sum(x) FROM truth_3d GROUP BY ALL ORDER BY ALL"
+        assert con.sql(scan).fetchall() == con.sql(scan).fetchall() == [
+            ("a", 3, 3.0), ("b", 2, 21.0)]
+        assert con.sql("SELECT typeof(frame), typeof(x) FROM truth_3d LIMIT 1").fetchall() == \
+            [("INTEGER", "DOUBLE")]
 
 
 def test_remote_filesystem_url(tmp_path):
