@@ -34,6 +34,7 @@ import numpy as np
 
 from handdb.errors import MissingToolError, ParameterError, StageError
 from handdb.export.gltf import export_clip_gltf
+from handdb.export.staging import staged_file
 from handdb.hand.skeletons import Skeleton
 
 FBX_SUFFIX = ".fbx"
@@ -209,13 +210,12 @@ def export_clip_fbx(
     if path.suffix != FBX_SUFFIX:
         raise ParameterError(f"{path}: the suffix must be {FBX_SUFFIX}")
     blender_command()
-    with tempfile.TemporaryDirectory(dir=path.parent, prefix=STAGING_PREFIX) as tmp:
-        conversion = stage_gltf(Path(tmp), path.stem, clip_id=clip_id, skeleton=skeleton,
-                                xyz=xyz, bone_lengths=bone_lengths, fps=fps, units=units,
-                                hand=hand)
+    with staged_file(path, STAGING_PREFIX) as staged:
+        conversion = stage_gltf(staged.parent, staged.stem, clip_id=clip_id,
+                                skeleton=skeleton, xyz=xyz, bone_lengths=bone_lengths,
+                                fps=fps, units=units, hand=hand)
         failed = convert_to_fbx([conversion])
         if failed:
             raise StageError(f"{path}: Blender could not convert the clip to FBX: "
                              f"{failed[clip_id]}")
-        os.replace(conversion.target, path)
     return path
