@@ -184,7 +184,7 @@ def fill_gaps(
         If ``method`` is not registered.
     GapFillError
         If the method cannot fill the clip from what it observes (``auto``: a joint never
-        observed in a clip with frames observing no point,
+        observed in a clip no frame of which observes enough of the palm to place it,
         :func:`~handdb.gapfill.auto.check_placeable`).
     ValueError
         If the shapes of ``uv``, ``observed`` and ``skeleton`` disagree, or ``sampling``
