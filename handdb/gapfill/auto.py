@@ -8,7 +8,8 @@
    bridge.
 2. Palm points (wrist, finger bases) stand still there: every gap of theirs is bridged by
    interpolation and held at the clip's ends, which makes a rigid-body fill.
-3. Finger points in interior gaps of at most ``short_gap`` frames: PCHIP interpolation.
+3. Finger points in interior gaps of at most ``short_gap`` frames: PCHIP interpolation;
+   so are, in the image, all the points of a frame that observes none.
 4. Finger points in longer, leading or trailing gaps: two estimates from the other joints,
    the point carried with its parent bone (:func:`~handdb.gapfill.rigid.carry_along_chains`,
    the joint's angle changing linearly across the gap) and a ridge regression on the finger
@@ -469,6 +470,17 @@ def _fill_track(
         _, frame, joint = gaps.select(chosen).frames()
         labels[frame, joint] = rule
     labels[on_chords] = "chord"
+    # A frame that observes nothing gives the palm frame nothing to be fitted to either:
+    # its points are interpolated in the image from the frames around it, the joints
+    # never observed from where the hand model placed them there.
+    empty = np.asarray(missing.all(axis=1))
+    if empty.any():
+        bridge = np.zeros_like(missing)
+        bridge[empty] = True
+        filled[empty] = interpolate_gaps(np.where(bridge[..., None], np.nan, filled), bridge,
+                                         "pchip")[empty]
+        labels[np.ix_(empty, np.isin(np.arange(missing.shape[1]), never_seen,
+                                     invert=True))] = "pchip"
     refined = refine_bone_lengths(filled, missing, skeleton, bone_lengths=bone_lengths,
                                   scale=scale)
     return MethodOutput(refined, labels=labels)
