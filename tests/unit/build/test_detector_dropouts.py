@@ -11,7 +11,6 @@ import json
 import shutil
 
 import numpy as np
-import pytest
 from typer.testing import CliRunner
 
 from handdb.build import BuildOptions, build_in_process
