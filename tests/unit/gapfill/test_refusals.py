@@ -12,6 +12,7 @@ import shutil
 import numpy as np
 import pytest
 
+from handdb.clip import IMAGES
 from handdb.errors import ClipDataError, GapFillError, ParameterError
 from handdb.gapfill import UNFILLED, WHOLE_CLIP, fill_gaps
 from handdb.gapfill.auto import SHORT_GAP
@@ -155,3 +156,21 @@ def test_a_joint_an_annotation_skips_is_placed_on_the_chord_of_its_neighbours(ra
     across = np.abs(np.cross(chord, offset)) / np.linalg.norm(chord, axis=-1)
     assert np.all((share > 0.3) & (share < 0.7))
     assert np.all(across < 1e-6 * np.linalg.norm(chord, axis=-1))
+
+
+def test_an_image_that_shows_too_little_of_the_palm_is_left_alone(rapid_clip, mediapipe):
+    """Independent images: one without a palm stays unfilled, the others are filled; only a
+    set of which no image shows the palm is refused."""
+    images = rapid_clip.uv[:6]
+    observed = np.ones(images.shape[:2], dtype=bool)
+    observed[:, mediapipe.index("thumb_cmc")] = False
+    fingertips = [mediapipe.index(f"{finger}_tip") for finger in ("index", "middle", "ring")]
+    observed[2] = False
+    observed[2, fingertips] = True
+    result = fill_gaps(images, observed, mediapipe, "auto", sampling=IMAGES)
+    others = np.arange(6) != 2
+    assert np.isfinite(result.uv[others]).all() and not result.filled[2].any()
+    palmless = np.zeros_like(observed)
+    palmless[:, fingertips] = True
+    with pytest.raises(GapFillError, match="no frame observes 3 of those"):
+        fill_gaps(images, palmless, mediapipe, "auto", sampling=IMAGES)
