@@ -18,8 +18,16 @@ from handdb.hand.skeletons import Skeleton
 #: Metres per unit of each length unit a sidecar may name.
 METERS_PER_UNIT: dict[str, float] = {"mm": 0.001, "cm": 0.01, "m": 1.0, "in": 0.0254}
 
-#: Points whose confidence is below this count as missing, unless the sidecar says.
+#: Points whose confidence is below this count as missing, unless the sidecar or the
+#: clip's format (:data:`FORMAT_MIN_CONFIDENCE`) says.
 DEFAULT_MIN_CONFIDENCE = 0.5
+
+#: The confidence below which a format's own tool counts a point as not found, by
+#: ``source_format``, where it is not :data:`DEFAULT_MIN_CONFIDENCE`. OpenPose's hand
+#: keypoint detector reports much lower confidences than its body detector: OpenPose draws
+#: a hand keypoint from 0.2 on (``hand_render_threshold``, default 0.2, in
+#: ``include/openpose/flags.hpp``, against 0.05 for the body and 0.4 for the face).
+FORMAT_MIN_CONFIDENCE: dict[str, float] = {"openpose": 0.2}
 
 HANDS = ("left", "right")
 CAMERA_MODELS = ("orthographic", "pinhole")
@@ -88,7 +96,7 @@ class ClipSpec:
     camera: Camera
     bone_lengths: dict[str, float] = field(default_factory=dict)
     hand_length: float | None = None
-    min_confidence: float = DEFAULT_MIN_CONFIDENCE
+    min_confidence: float | None = None
     joint_map: dict[str, str | None] = field(default_factory=dict)
     image_width: int | None = None
     image_height: int | None = None
@@ -178,5 +186,16 @@ class Clip:
             return np.isfinite(self.markers).all(axis=-1)
         present = np.isfinite(self.uv).all(axis=-1)
         conf = self.confidence
-        confident = np.isnan(conf) | (conf >= self.spec.min_confidence)
+        confident = np.isnan(conf) | (conf >= self.min_confidence)
         return present & confident
+
+    @property
+    def min_confidence(self) -> float:
+        """The confidence below which points count as missing.
+
+        The sidecar's, else the format's (:data:`FORMAT_MIN_CONFIDENCE`), else
+        :data:`DEFAULT_MIN_CONFIDENCE`.
+        """
+        if self.spec.min_confidence is not None:
+            return self.spec.min_confidence
+        return FORMAT_MIN_CONFIDENCE.get(self.source_format, DEFAULT_MIN_CONFIDENCE)

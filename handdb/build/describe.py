@@ -53,7 +53,7 @@ def clip_line(item: PlannedClip, outcome: ClipResult | Refusal | StageFailed) ->
     line = (f"clip {clip_id}: ran {', '.join(stages)}{read_back}; "
             f"{outcome.clip.n_frames} frames")
     if outcome.verdict is not None and outcome.verdict.flagged:
-        line += f"; flagged as implausible: {'; '.join(outcome.verdict.reasons)}"
+        line += f"; flagged: {'; '.join(outcome.verdict.reasons)}"
     return line
 
 

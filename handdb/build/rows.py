@@ -93,7 +93,7 @@ def clips_table(result: ClipResult, source_files: list[str]) -> pa.Table:
         "sampling": [clip.sampling],
         "n_joints": [clip.skeleton.n_joints],
         "n_observed": [int(clip.observed.sum())],
-        "min_confidence": [spec.min_confidence],
+        "min_confidence": [clip.min_confidence],
         "gap_fill_method": [result.fill.method if result.fill else None],
         "lift_method": [result.lifted.method if result.lifted else None],
         "has_truth": [clip.truth is not None],

@@ -31,6 +31,7 @@ from handdb.errors import (
 )
 from handdb.gapfill import DEFAULT_METHOD as DEFAULT_GAP_FILL
 from handdb.gapfill import FillResult, fill_gaps
+from handdb.gapfill.caveats import empty_frames, fill_caveats
 from handdb.ingest import ClipEntry, load_clip
 from handdb.lengths.bone_lengths import BoneLengths, clip_bone_lengths
 from handdb.lifting import DEFAULT_METHOD as DEFAULT_LIFT
@@ -205,7 +206,9 @@ def validate(result: ClipResult, options: BuildOptions) -> ClipResult:
     """Check the result against what hands can be; compare it with the ground truth, if any.
 
     The plausibility gate (:func:`handdb.validation.plausibility.assess`) runs on every
-    clip; the lifting methods are compared on clips with ground truth.
+    clip; what gap filling could not know (:func:`handdb.gapfill.caveats.fill_caveats`)
+    joins its reasons, and the frames left without positions its rows. The lifting
+    methods are compared on clips with ground truth.
     """
     clip = result.clip
     lifted = _needs(result.lifted, "lift", result)
@@ -214,6 +217,9 @@ def validate(result: ClipResult, options: BuildOptions) -> ClipResult:
     verdict = assess(clip.skeleton, clip.spec.units, clip.spec.hand, bones.lengths,
                      lifted.xyz, residual, labelled=clip.markers,
                      sampling=clip.sampling)
+    if result.fill is not None:
+        verdict = Verdict(reasons=(*fill_caveats(result.fill, clip.skeleton), *verdict.reasons),
+                          rows=verdict.rows | empty_frames(result.fill)[:, None])
     result = replace(result, verdict=verdict)
     if clip.truth is None:
         return result

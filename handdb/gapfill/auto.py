@@ -8,7 +8,8 @@
    bridge.
 2. Palm points (wrist, finger bases) stand still there: every gap of theirs is bridged by
    interpolation and held at the clip's ends, which makes a rigid-body fill.
-3. Finger points in interior gaps of at most ``short_gap`` frames: PCHIP interpolation.
+3. Finger points in interior gaps of at most ``short_gap`` frames: PCHIP interpolation;
+   so are, in the image, all the points of a frame that observes none.
 4. Finger points in longer, leading or trailing gaps: two estimates from the other joints,
    the point carried with its parent bone (:func:`~handdb.gapfill.rigid.carry_along_chains`,
    the joint's angle changing linearly across the gap) and a ridge regression on the finger
@@ -22,9 +23,15 @@
 5. Joints never observed are placed first, so that the other joints can lean on them:
    between their parent and only child where both are observed (a DIP an annotation
    skips, :func:`~handdb.gapfill.rigid.place_on_chords`, label ``chord``), else by the
-   rest pose fitted to the observed joints of each frame.
+   rest pose fitted to the observed joints of each frame, and bridged like any gap across
+   frames that observe too little to fit it to. A clip no frame of which observes enough
+   of the palm is refused (:func:`check_placeable`).
 6. Kinematic refinement (:mod:`handdb.gapfill.refine`): filled points are pulled back
    where they would stretch a bone beyond its length.
+
+Frames that observe no point are filled like any gap in interior runs of at most
+``short_gap`` frames; runs at the clip's ends, or longer, stay unfilled (NaN) and split the
+clip into segments filled on their own (:func:`track_segments`).
 
 Each filled point is labelled with the rule that filled it (``rigid``, ``pchip``,
 ``validated``, ``chord``, ``rest-pose``).
@@ -51,6 +58,7 @@ from handdb.gapfill.refine import refine_bone_lengths
 from handdb.gapfill.registry import MethodOutput
 from handdb.gapfill.regression import regression_estimates, regression_samples
 from handdb.gapfill.rigid import (
+    MIN_PALM_POINTS,
     carry_along_chains_many,
     palm_joints,
     place_from_rest_pose,
@@ -68,11 +76,10 @@ LONG_GAP_RULES = (*ESTIMATES, "validated")
 #: The estimates weighed by ``"validated"``.
 VALIDATED_ESTIMATES = ("chain", "regression")
 
-#: Runs of frames with no observed point named in a refusal, at most.
-SHOWN_RUNS = 3
-
+#: The labels of the points the hand model places: joints never observed.
+MODEL_RULES = ("chord", "rest-pose")
 #: The labels of the points ``auto`` fills, by the rule that filled them.
-RULE_LABELS = ("rigid", "pchip", *LONG_GAP_RULES, "chord", "rest-pose")
+RULE_LABELS = ("rigid", "pchip", *LONG_GAP_RULES, *MODEL_RULES)
 
 #: Observed runs per joint hidden to weigh the long-gap estimates against each other.
 VALIDATION_GAPS = 3
@@ -300,13 +307,12 @@ def _long_gap_fill(
 
 
 def check_placeable(missing: np.ndarray, skeleton: Skeleton, never_seen: np.ndarray) -> None:
-    """Refuse a clip whose never-observed joints cannot be placed in every frame.
+    """Refuse a clip that observes too little of the palm to place its never-observed joints.
 
-    A joint never observed is placed in each frame by the rest pose fitted to that frame's
-    observed points (:func:`~handdb.gapfill.rigid.place_from_rest_pose`); a frame that
-    observes no point gives nothing to fit, and its placed points would be NaN, which the
-    regressions downstream cannot solve with (numpy's "Singular matrix"). Labelled frames
-    sparse in time (DeepLabCut's labelled images at their frame numbers) are such clips.
+    A joint never observed is placed from the rest pose fitted to the wrist and finger
+    bases a frame observes (:func:`~handdb.gapfill.rigid.place_from_rest_pose`); a clip
+    none of whose frames observes :data:`~handdb.gapfill.rigid.MIN_PALM_POINTS` of them
+    gives no hand to place it on.
 
     Parameters
     ----------
@@ -320,27 +326,51 @@ def check_placeable(missing: np.ndarray, skeleton: Skeleton, never_seen: np.ndar
     Raises
     ------
     GapFillError
-        If ``never_seen`` is not empty and some frame observes no point; the message names
-        the joints and the first runs of empty frames.
+        If ``never_seen`` is not empty and no frame observes enough palm points; the
+        message names the joints never observed and the palm points the clip does observe.
     """
-    empty = np.asarray(missing.all(axis=1))
-    if not never_seen.size or not empty.any():
+    palm = palm_joints(skeleton)
+    if not never_seen.size or (~missing & palm).sum(axis=1).max() >= MIN_PALM_POINTS:
         return
-    runs = find_gaps(empty[:, None])
-    shown = ", ".join(f"{start}-{stop - 1}" if stop - start > 1 else f"{start}"
-                      for start, stop in zip(runs.start[:SHOWN_RUNS], runs.stop[:SHOWN_RUNS],
-                                             strict=True))
-    more = f" and {len(runs) - SHOWN_RUNS} more runs" if len(runs) > SHOWN_RUNS else ""
+    seen = [skeleton.joints[j] for j in np.flatnonzero(palm & ~missing.all(axis=0))]
     names = ", ".join(skeleton.joints[j] for j in never_seen)
     raise GapFillError(
         f"gap filling by 'auto' cannot place {names}: never observed in the clip, they are "
-        "placed in each frame from the rest pose fitted to the points the frame observes, "
-        f"and {int(empty.sum())} of {empty.size} frames observe no point (frames {shown}"
-        f"{more}). Frames sparse in time (labelled images at their frame numbers) are not "
-        "a track: number them in order (DeepLabCut: \"frame_from\": \"row\") or drop the "
-        "empty frames; or map a body part to each of those joints; or give the sidecar "
-        "\"gap_fill\": {\"method\": \"rigid\"}, which leaves what it cannot place unfilled"
+        "placed from the hand model fitted to the wrist and finger bases, and no frame "
+        f"observes {MIN_PALM_POINTS} of those (the clip observes "
+        f"{', '.join(seen) if seen else 'none of them'}). Map the tool's body parts to the "
+        "wrist and the knuckles (\"joint_map\"), lower \"min_confidence\" if the detector "
+        "reported them with low confidence, or give the sidecar \"gap_fill\": "
+        "{\"method\": \"rigid\"}, which leaves what it cannot place unfilled"
     )
+
+
+def track_segments(missing: np.ndarray, short_gap: int) -> list[tuple[int, int]]:
+    """The runs of frames filled as one track, between frames that stay unfilled.
+
+    Frames that observe no point are bridged like any gap when they form an interior run
+    of at most ``short_gap`` frames; runs at the clip's start or end, or longer, give
+    nothing to bridge from and split the clip.
+
+    Parameters
+    ----------
+    missing
+        ``(T, J) bool``.
+    short_gap
+        Longest run of empty frames bridged, frames.
+
+    Returns
+    -------
+    list of tuple of int
+        ``(start, stop)`` of each segment, frames, ``stop`` exclusive, in order.
+    """
+    runs = find_gaps(np.asarray(missing.all(axis=1))[:, None])
+    kept = runs.select(~runs.interior | (runs.length > short_gap))
+    unfilled = np.zeros(missing.shape[0], dtype=bool)
+    for start, stop in zip(kept.start, kept.stop, strict=True):
+        unfilled[start:stop] = True
+    segments = find_gaps(~unfilled[:, None])
+    return [(int(a), int(b)) for a, b in zip(segments.start, segments.stop, strict=True)]
 
 
 def fill_auto(
@@ -380,22 +410,43 @@ def fill_auto(
     ParameterError
         If ``long_gaps`` is not a rule.
     GapFillError
-        If a joint is never observed and some frame observes no point: the joint cannot
-        be placed there (see :func:`check_placeable`).
+        If a joint is never observed and no frame observes enough of the palm to place it
+        (see :func:`check_placeable`).
     """
     if long_gaps not in LONG_GAP_RULES:
         raise ParameterError(
             f"long_gaps must be one of {', '.join(LONG_GAP_RULES)}; got '{long_gaps}'"
         )
     gaps = find_gaps(missing)
+    check_placeable(missing, skeleton, np.unique(gaps.joint[gaps.whole_clip]))
+    filled = uv.copy()
+    labels = np.zeros(missing.shape, dtype=f"<U{max(map(len, RULE_LABELS))}")
+    for start, stop in track_segments(missing, short_gap):
+        part = _fill_track(uv[start:stop], missing[start:stop], skeleton, short_gap=short_gap,
+                           long_gaps=long_gaps, variance=variance, bone_lengths=bone_lengths,
+                           scale=scale[start:stop] if isinstance(scale, np.ndarray) else scale,
+                           smooth=smooth)
+        filled[start:stop], labels[start:stop] = part.uv, part.labels
+    return MethodOutput(filled, labels=labels)
+
+
+def _fill_track(
+    uv: np.ndarray, missing: np.ndarray, skeleton: Skeleton, *, short_gap: int,
+    long_gaps: str, variance: float, bone_lengths: dict[str, float] | None,
+    scale: float | np.ndarray | None, smooth: bool,
+) -> MethodOutput:
+    """Fill one segment of :func:`track_segments` (the parameters of :func:`fill_auto`).
+
+    A joint the segment never observes is placed from the rest pose in each frame that
+    observes enough to fit it, and bridged like any gap across the frames that do not.
+    """
+    gaps = find_gaps(missing)
     never_seen = np.unique(gaps.joint[gaps.whole_clip])
-    check_placeable(missing, skeleton, never_seen)
     smoothed = denoise(uv, missing)[0] if smooth else uv
     placed = (place_from_rest_pose(smoothed, missing, skeleton, never_seen) if never_seen.size
               else smoothed)
     placed, on_chords = place_on_chords(placed, missing, skeleton, never_seen)
-    unknown = missing.copy()
-    unknown[:, never_seen] = False
+    unknown = missing & ~np.isfinite(placed).all(axis=-1)
     motion = palm_motion(smoothed, missing, skeleton)
     local = placed if motion is None else to_palm_frame(placed, motion)
 
@@ -419,6 +470,17 @@ def fill_auto(
         _, frame, joint = gaps.select(chosen).frames()
         labels[frame, joint] = rule
     labels[on_chords] = "chord"
+    # A frame that observes nothing gives the palm frame nothing to be fitted to either:
+    # its points are interpolated in the image from the frames around it, the joints
+    # never observed from where the hand model placed them there.
+    empty = np.asarray(missing.all(axis=1))
+    if empty.any():
+        bridge = np.zeros_like(missing)
+        bridge[empty] = True
+        filled[empty] = interpolate_gaps(np.where(bridge[..., None], np.nan, filled), bridge,
+                                         "pchip")[empty]
+        labels[np.ix_(empty, np.isin(np.arange(missing.shape[1]), never_seen,
+                                     invert=True))] = "pchip"
     refined = refine_bone_lengths(filled, missing, skeleton, bone_lengths=bone_lengths,
                                   scale=scale)
     return MethodOutput(refined, labels=labels)

@@ -15,6 +15,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from handdb.clip import IMAGES, SAMPLINGS, VIDEO
+from handdb.errors import GapFillError
 from handdb.gapfill.gaps import find_gaps, mask_points
 from handdb.gapfill.methods import DEFAULT_METHOD, METHODS, MethodInfo
 from handdb.hand.skeletons import Skeleton
@@ -128,19 +129,28 @@ def _fill_each_image(info: MethodInfo, uv: np.ndarray, missing: np.ndarray,
 
     Independent images share no time: what fills a point is the frame's own points and the
     hand model (a DIP on its chord, a joint never seen from the rest pose fitted to the
-    frame), never a neighbouring image. A frame that observes no point is left unfilled.
+    frame), never a neighbouring image. A frame that observes no point, or too little for
+    the method to fill (:class:`~handdb.errors.GapFillError`), is left unfilled; the clip
+    is refused only when that is every frame.
     """
     filled = uv.copy()
     labels = np.full(missing.shape, "", dtype=object)
     has_labels = False
     flags: list[GapFlag] = []
+    refusals: list[GapFillError] = []
     for frame in np.flatnonzero(~missing.all(axis=1)):
-        one = info.fill(uv[frame:frame + 1], missing[frame:frame + 1], skeleton, **params)
+        try:
+            one = info.fill(uv[frame:frame + 1], missing[frame:frame + 1], skeleton, **params)
+        except GapFillError as error:
+            refusals.append(error)
+            continue
         filled[frame] = one.uv[0]
         if one.labels is not None:
             labels[frame], has_labels = one.labels[0], True
         flags += [replace(flag, start=flag.start + int(frame), stop=flag.stop + int(frame))
                   for flag in one.flags]
+    if refusals and len(refusals) == int((~missing.all(axis=1)).sum()):
+        raise refusals[0]
     return MethodOutput(filled, labels=labels.astype(str) if has_labels else None,
                         flags=tuple(flags))
 
@@ -184,7 +194,7 @@ def fill_gaps(
         If ``method`` is not registered.
     GapFillError
         If the method cannot fill the clip from what it observes (``auto``: a joint never
-        observed in a clip with frames observing no point,
+        observed in a clip no frame of which observes enough of the palm to place it,
         :func:`~handdb.gapfill.auto.check_placeable`).
     ValueError
         If the shapes of ``uv``, ``observed`` and ``skeleton`` disagree, or ``sampling``

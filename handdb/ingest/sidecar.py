@@ -7,9 +7,10 @@ The sidecar says how to read the clip's track file and what the numbers mean::
 
 ``camera`` may instead be ``{"model": "pinhole", "fx": .., "fy": .., "cx": .., "cy": ..}``
 (pixels); a clip whose data file is already 3D (markers) needs no camera. Optional keys:
-``bone_lengths`` (child joint -> length in ``units``), ``min_confidence`` (default 0.5),
-``joint_map`` (tool names -> canonical names, or ``null`` for names to ignore; ``"*":
-null`` ignores every unmapped name), ``image`` (``{"width": W, "height": H}``, pixels;
+``bone_lengths`` (child joint -> length in ``units``), ``min_confidence`` (default 0.5;
+OpenPose 0.2, :data:`~handdb.clip.FORMAT_MIN_CONFIDENCE`), ``joint_map`` (tool names ->
+canonical names, or ``null`` for names to ignore; ``"*": null`` ignores every unmapped
+name), ``image`` (``{"width": W, "height": H}``, pixels;
 needed for normalised coordinates), ``gap_fill`` and ``lift``
 (``{"method": NAME, ...parameters}``), and the reader options of :data:`READER_KEYS`,
 each read by the formats that name it in their ``sidecar_keys``.
@@ -30,7 +31,6 @@ from typing import Any
 
 from handdb.clip import (
     CAMERA_MODELS,
-    DEFAULT_MIN_CONFIDENCE,
     HANDS,
     METERS_PER_UNIT,
     NO_CAMERA,
@@ -326,7 +326,7 @@ def parse_sidecar_text(text: str, path: str, clip_id: str, *,
                            HAND_LENGTH_RANGE_METRES, "hand_length", path)
                    if "hand_length" in doc else None)
 
-    min_conf = DEFAULT_MIN_CONFIDENCE
+    min_conf = None
     if "min_confidence" in doc:
         min_conf = _number(doc, "min_confidence", path, positive=False)
         if not 0.0 <= min_conf <= 1.0:

@@ -107,8 +107,9 @@ def test_labelled_images_build_the_same_in_any_order(tmp_path, labelled):
         db = str(tmp_path / name / "db")
         summary = build_in_process(inbox, db, BuildOptions(export_usd=False))
         assert list(summary.processed) == ["hand"]
-        row = query(db, "SELECT sampling, flagged, flag_reasons FROM clips").to_pylist()[0]
-        assert row == {"sampling": IMAGES, "flagged": False, "flag_reasons": []}
+        row = query(db, "SELECT sampling, flag_reasons FROM clips").to_pylist()[0]
+        assert row == {"sampling": IMAGES, "flag_reasons": [
+            f"{dip} never detected: placed by the hand model (chord)" for dip in DIPS]}
         joints = query(db, "SELECT frame, joint_index, x, y, z FROM joints_3d "
                            "ORDER BY frame, joint_index").to_pydict()
         xyz[name] = np.stack([joints[c] for c in "xyz"], axis=-1).reshape(N_IMAGES, -1, 3)
@@ -124,8 +125,11 @@ def test_the_real_labelled_hands_build_plausible(real_tools, tmp_path, individua
     db = str(tmp_path / "db")
     summary = build_in_process(tmp_path / "inbox", db, BuildOptions(export_usd=False))
     assert list(summary.processed) == ["clip"] and not summary.refusals
-    row = query(db, "SELECT n_frames, sampling, flagged, flag_reasons FROM clips").to_pylist()
-    assert row == [{"n_frames": 20, "sampling": IMAGES, "flagged": False, "flag_reasons": []}]
+    (row,) = query(db, "SELECT n_frames, sampling, flag_reasons FROM clips").to_pylist()
+    assert (row["n_frames"], row["sampling"]) == (20, IMAGES)
+    # the annotation has no thumb_cmc and no DIP: said, and nothing implausible besides
+    assert [reason.split(" never detected: placed by the hand model")[0]
+            for reason in row["flag_reasons"]] == ["thumb_cmc", *DIPS]
     placed = query(db, "SELECT count(*) AS n FROM joints_3d WHERE isfinite(z)").to_pylist()
     assert placed == [{"n": 20 * 21}]
 

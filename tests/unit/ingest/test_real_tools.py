@@ -73,8 +73,8 @@ def points(clip):
 
 # --- accepted as the tools wrote them -------------------------------------------------------
 
-@pytest.mark.parametrize(("hand", "observed", "wrist"), [("right", 105, [530.9, 463.3]),
-                                                         ("left", 179, [740.3, 521.2])])
+@pytest.mark.parametrize(("hand", "observed", "wrist"), [("right", 169, [530.9, 463.3]),
+                                                         ("left", 189, [740.3, 521.2])])
 def test_openpose_hand_json(real_tools, tmp_path, hand, observed, wrist):
     put(real_tools, tmp_path, "openpose", SIDECAR_2D | {"hand": hand, "person": 0})
     clip = read(tmp_path)

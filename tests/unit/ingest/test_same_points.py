@@ -15,7 +15,8 @@ def three_format_inbox(tmp_path, write_sidecar, mediapipe21, noisy_track):
     openpose.write(tmp_path / "as_openpose.openpose", uv, confidence, mediapipe21, hand="right")
     dlc.write(tmp_path / "as_dlc.dlc.csv", uv, confidence, mediapipe21, bodyparts=TOOL_NAMES)
     write_sidecar(tmp_path, "as_csv")
-    write_sidecar(tmp_path, "as_openpose")
+    # OpenPose's own threshold is 0.2 (handdb.clip.FORMAT_MIN_CONFIDENCE): ask for the others'
+    write_sidecar(tmp_path, "as_openpose", min_confidence=0.5)
     write_sidecar(tmp_path, "as_dlc", joint_map={v: k for k, v in TOOL_NAMES.items()})
     return tmp_path
 

@@ -1,0 +1,74 @@
+"""What a gap fill could not know, in words: the notes a stored clip carries.
+
+A joint the detector never reported is placed by the hand model, and frames that observe
+nothing outside a short interior run stay without positions; neither is a refusal, and
+neither may pass silently. :func:`fill_caveats` says both, for ``clips.flag_reasons``.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from handdb.gapfill.auto import MODEL_RULES
+from handdb.gapfill.gaps import find_gaps
+from handdb.gapfill.registry import WHOLE_CLIP, FillResult
+from handdb.hand.skeletons import Skeleton
+
+#: Runs of frames named in a caveat, at most.
+SHOWN_RUNS = 3
+
+
+def _runs(frames: np.ndarray) -> str:
+    """``frames`` ``(T,) bool`` as its first runs, ``"0-1, 7"``, and how many more."""
+    runs = find_gaps(frames[:, None])
+    shown = ", ".join(f"{start}-{stop - 1}" if stop - start > 1 else f"{start}"
+                      for start, stop in zip(runs.start[:SHOWN_RUNS], runs.stop[:SHOWN_RUNS],
+                                             strict=True))
+    more = f" and {len(runs) - SHOWN_RUNS} more runs" if len(runs) > SHOWN_RUNS else ""
+    return shown + more
+
+
+def _never_detected(result: FillResult, skeleton: Skeleton, joint: str) -> str:
+    """The caveat of one joint missing in every frame."""
+    index = skeleton.index(joint)
+    placed = result.filled[:, index]
+    if not placed.any():
+        return f"{joint} never detected: left without positions"
+    rules = sorted(set(result.fill_method[placed, index]))
+    how = ("placed by the hand model" if set(rules) <= set(MODEL_RULES)
+           else "filled by gap filling")
+    where = "" if placed.all() else f" in {int(placed.sum())} of {placed.size} frames"
+    return f"{joint} never detected: {how} ({', '.join(rules)}){where}"
+
+
+def empty_frames(result: FillResult) -> np.ndarray:
+    """``(T,) bool``: the frames left without any position (none observed, none filled)."""
+    return ~np.isfinite(result.uv).any(axis=(1, 2))
+
+
+def fill_caveats(result: FillResult, skeleton: Skeleton) -> tuple[str, ...]:
+    """What the gap fill of a clip could not know, one sentence each.
+
+    Parameters
+    ----------
+    result
+        The clip's gap fill.
+    skeleton
+        The skeleton of ``result``'s joint axis.
+
+    Returns
+    -------
+    tuple of str
+        A joint never detected and how it was placed (``"little_tip never detected:
+        placed by the hand model (rest-pose)"``), then the frames left without positions
+        (``"2 of 9 frames (0-1) observe no point and were not filled: stored without
+        positions"``); empty when the
+        fill knew everything it filled.
+    """
+    caveats = [_never_detected(result, skeleton, flag.joint)
+               for flag in result.flags_of(WHOLE_CLIP)]
+    empty = empty_frames(result)
+    if empty.any():
+        caveats.append(f"{int(empty.sum())} of {empty.size} frames ({_runs(empty)}) observe "
+                       "no point and were not filled: stored without positions")
+    return tuple(caveats)
