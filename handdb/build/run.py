@@ -255,7 +255,7 @@ def summary_markdown(summary: BuildSummary) -> str:
         f"unchanged {len(summary.unchanged)}, failed {len(summary.failed)}",
         f"- frames processed: {summary.n_frames}",
         f"- refused inputs (quarantine): {len(summary.refusals)}",
-        f"- flagged as implausible: {len(summary.flagged)}",
+        f"- flagged: {len(summary.flagged)}",
     ]
     if summary.repairs:
         lines += ["", "Damaged or missing in the database, written again:", ""]
