@@ -234,6 +234,20 @@ def settle(case: Case, palm_floor: float, thumb_floor: float) -> Settled:
     return max(tried, key=lambda s: s.score)
 
 
+def _state_lead(height_ll: np.ndarray) -> np.ndarray:
+    """How much more likely palm state 0 makes each frame's thumb-base height than state 1.
+
+    ``height_ll`` ``(2, T, 2)``: log-likelihood of each sign's height under each state.
+    Returns ``(T,)`` nats, 0 in a frame whose thumb base has no height (nothing seen).
+    """
+    known = np.isfinite(height_ll).all(axis=(0, 2))
+    lead = np.zeros(height_ll.shape[1])
+    ll = height_ll[:, known]
+    lead[known] = (np.logaddexp(ll[0, :, 0], ll[1, :, 0])
+                   - np.logaddexp(ll[0, :, 1], ll[1, :, 1]))
+    return lead
+
+
 def _settle_round(case: Case, tallies: _Tallies, palm_floor: float, thumb_floor: float,
                   height_ll: np.ndarray | None, height: float, spread: float) -> Settled:
     """One pass of the tilt chain and, given a clip height, the thumb base's chain.
@@ -253,9 +267,7 @@ def _settle_round(case: Case, tallies: _Tallies, palm_floor: float, thumb_floor:
         base_odds = own[0] - own[1]                                      # (T, 2)
         sign = (base_odds < 0).astype(np.int64)
         if np.isfinite(height):
-            tilt = tilt + np.clip(np.logaddexp(height_ll[0, :, 0], height_ll[1, :, 0])
-                                  - np.logaddexp(height_ll[0, :, 1], height_ll[1, :, 1]),
-                                  -THUMB_TILT_CAP, THUMB_TILT_CAP)
+            tilt = tilt + np.clip(_state_lead(height_ll), -THUMB_TILT_CAP, THUMB_TILT_CAP)
         base_dz = case.thumb_dz[sign, frames[:, None], states]           # (T, 2)
         values = np.concatenate([values, base_dz[..., None]], axis=-1)
     thumb_vote = tallies.thumb_evidence[sign, frames[:, None], states]   # (T, 2)
