@@ -40,7 +40,7 @@ def clip_line(item: PlannedClip, outcome: ClipResult | Refusal | StageFailed) ->
     """One log line saying what the build did with ``item``: stages run, refused, failed.
 
     A processed clip's line names the stages that ran, its frames and, when it was flagged
-    as implausible, why.
+    as implausible or its depth pose is as likely mirrored, why.
     """
     clip_id = item.clip_id
     if isinstance(outcome, StageFailed):
@@ -54,6 +54,8 @@ def clip_line(item: PlannedClip, outcome: ClipResult | Refusal | StageFailed) ->
             f"{outcome.clip.n_frames} frames")
     if outcome.verdict is not None and outcome.verdict.flagged:
         line += f"; flagged: {'; '.join(outcome.verdict.reasons)}"
+    if outcome.lifted is not None and outcome.lifted.mirror_ambiguous:
+        line += f"; depth ambiguous: {outcome.lifted.note}"
     return line
 
 

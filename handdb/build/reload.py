@@ -4,12 +4,14 @@ A rebuild starts at the first stage whose key changed (:mod:`handdb.build.keys`)
 stages before it are not run again but read from the tables they wrote: the ingested
 tracks from ``tracks_2d``, ``truth_3d`` and ``markers_3d`` (with the clip's sidecar, whose
 bytes the ingest key covers), bone lengths from ``bone_lengths``, the filled points and the
-lifted joints from ``joints_3d``, the comparison from ``validation_joint``.
+lifted joints from ``joints_3d`` (the lifting's doubt about the depth pose from ``clips``),
+the comparison from ``validation_joint``.
 """
 
 from __future__ import annotations
 
 from dataclasses import replace
+from typing import Any
 
 import numpy as np
 import pyarrow as pa
@@ -64,14 +66,17 @@ def _stored_fill(joints: pa.Table, clip: Clip, method: str) -> FillResult:
     return FillResult(uv=uv, filled=filled, method=method, fill_method=labels, flags=())
 
 
-def _stored_lift(joints: pa.Table, clip: Clip, method: str) -> LiftResult:
+def _stored_lift(joints: pa.Table, clip: Clip, row: dict[str, Any]) -> LiftResult:
+    """The lift from ``joints_3d``; its doubt about the depth pose from the ``clips`` row."""
     shape = clip.observed.shape
     per_joint = {name: joints.column(name).to_numpy(zero_copy_only=False).reshape(shape)
                  for name in ("scale", "sign_confidence", "length_inconsistency")}
     return LiftResult(xyz=scatter(joints, shape + (3,), ("x", "y", "z")),
                       sign_confidence=per_joint["sign_confidence"],
                       length_inconsistency=per_joint["length_inconsistency"],
-                      scale=per_joint["scale"][:, 0], method=method)
+                      scale=per_joint["scale"][:, 0], method=row["lift_method"],
+                      mirror_ambiguous=bool(row["depth_ambiguous"]),
+                      mirror_log_odds=row["depth_log_odds"], note=row["lift_note"] or "")
 
 
 def resume(store: Store, entry: ClipEntry, content_hash: str, keys: dict[str, str],
@@ -104,7 +109,7 @@ def resume(store: Store, entry: ClipEntry, content_hash: str, keys: dict[str, st
         clip=clip, keys=keys,
         bones=stored_bone_lengths(store, clip) if "lengths" in done else None,
         fill=_stored_fill(joints, clip, row["gap_fill_method"]) if "gap_fill" in done else None,
-        lifted=_stored_lift(joints, clip, row["lift_method"]) if "lift" in done else None,
+        lifted=_stored_lift(joints, clip, row) if "lift" in done else None,
         validation=validation,
         report=markdown_summary(clip.clip_id, validation) if validation is not None else None,
         verdict=verdict,

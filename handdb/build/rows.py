@@ -13,6 +13,7 @@ from handdb.build.keys import build_key
 from handdb.build.stages import ClipResult
 from handdb.ingest import inbox_relative, tracks_2d_table, truth_3d_table
 from handdb.lengths.bone_lengths import bone_lengths_table
+from handdb.lifting import LiftResult
 from handdb.markers.fit import joint_angles_table
 from handdb.markers.tables import markers_3d_table
 from handdb.store import tables
@@ -69,6 +70,22 @@ def joints_3d_table(result: ClipResult) -> pa.Table:
     })
 
 
+def _depth_confidence(lifted: LiftResult | None) -> dict[str, list]:
+    """The ``clips`` columns of the lifting's doubt about the clip's depth pose.
+
+    ``depth_log_odds`` and ``depth_ambiguous`` are NULL where the method does not weigh
+    the mirror (marker fits, ``thesis``, ``model-fit``).
+    """
+    if lifted is None:
+        return dict.fromkeys(("depth_log_odds", "depth_ambiguous", "lift_note"), [None])
+    odds = lifted.mirror_log_odds
+    return {
+        "depth_log_odds": [odds],
+        "depth_ambiguous": [None if odds is None else lifted.mirror_ambiguous],
+        "lift_note": [lifted.note or None],
+    }
+
+
 def clips_table(result: ClipResult, source_files: list[str]) -> pa.Table:
     """The clip's one row of ``clips``."""
     clip, spec = result.clip, result.clip.spec
@@ -96,6 +113,7 @@ def clips_table(result: ClipResult, source_files: list[str]) -> pa.Table:
         "min_confidence": [clip.min_confidence],
         "gap_fill_method": [result.fill.method if result.fill else None],
         "lift_method": [result.lifted.method if result.lifted else None],
+        **_depth_confidence(result.lifted),
         "has_truth": [clip.truth is not None],
         "flagged": [result.verdict is not None and result.verdict.flagged],
         "flag_reasons": [list(result.verdict.reasons) if result.verdict is not None else []],

@@ -57,6 +57,9 @@ process_clip = LazyFunction("handdb.build.process:process_clip")
 class BuildSummary:
     """What a build did, for the command line, the artifacts and the ``runs`` table.
 
+    ``flagged`` maps each clip no hand could produce to the reasons; ``depth_ambiguous``
+    each clip whose depth pose is not settled against its mirror image to the lifting's
+    note (the clip is plausible: its ``clips`` row has ``depth_ambiguous`` true).
     ``flow_run_id`` and ``flow_run_url`` are the orchestrator's run of the build and its
     page, when an orchestrator ran it (``None`` for the local runner, and the URL ``None``
     too when no lasting server shows the run); ``changed`` says whether the build wrote
@@ -74,6 +77,7 @@ class BuildSummary:
     failed: dict[str, str] = field(default_factory=dict)
     validation: dict[str, dict[str, dict[str, float]]] = field(default_factory=dict)
     flagged: dict[str, tuple[str, ...]] = field(default_factory=dict)
+    depth_ambiguous: dict[str, str] = field(default_factory=dict)
     timings: dict[str, float] = field(default_factory=dict)
     removed_temporaries: int = 0
     repairs: tuple[str, ...] = ()
@@ -157,6 +161,8 @@ class Build:
                 summary.validation[clip_id] = clip_summary(outcome.validation)
             if outcome.verdict is not None and outcome.verdict.flagged:
                 summary.flagged[clip_id] = outcome.verdict.reasons
+            if outcome.lifted is not None and outcome.lifted.mirror_ambiguous:
+                summary.depth_ambiguous[clip_id] = outcome.lifted.note
             progress.finished(clip_id, progress.DONE)
 
     def finish(self) -> BuildSummary:
@@ -256,6 +262,7 @@ def summary_markdown(summary: BuildSummary) -> str:
         f"- frames processed: {summary.n_frames}",
         f"- refused inputs (quarantine): {len(summary.refusals)}",
         f"- flagged: {len(summary.flagged)}",
+        f"- depth ambiguous (the mirror image as likely): {len(summary.depth_ambiguous)}",
     ]
     if summary.repairs:
         lines += ["", "Damaged or missing in the database, written again:", ""]
@@ -269,6 +276,11 @@ def summary_markdown(summary: BuildSummary) -> str:
                   "| clip | why |", "|---|---|"]
         lines += [f"| {clip_id} | {'; '.join(reasons)} |"
                   for clip_id, reasons in sorted(summary.flagged.items())]
+    if summary.depth_ambiguous:
+        lines += ["", "Depth-ambiguous clips: stored, plausible, but their depths may be the "
+                  "mirror image of the hand's:", "", "| clip | why |", "|---|---|"]
+        lines += [f"| {clip_id} | {note} |"
+                  for clip_id, note in sorted(summary.depth_ambiguous.items())]
     if summary.validation:
         lines += ["", "Depth against ground truth, processed clips (clip units):", "",
                   "| clip | method | mean abs dZ | sign accuracy | MPJPE |",

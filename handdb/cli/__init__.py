@@ -178,7 +178,7 @@ def _timing(timings: dict[str, float]) -> str:
 
 
 def print_summary(summary) -> None:
-    """Print a build summary: clips, refusals, implausible results, failures."""
+    """Print a build summary: clips, refusals, implausible results, ambiguous depths, failures."""
     console.print(
         f"[bold]built[/] {summary.db}: {summary.n_clips} clips in the inbox, "
         f"{len(summary.processed)} processed ({summary.n_frames} frames), "
@@ -195,6 +195,8 @@ def print_summary(summary) -> None:
         console.print(f"  [yellow]quarantined[/] {refusal}", soft_wrap=True)
     for clip_id, reasons in summary.flagged.items():
         console.print(f"  [yellow]flagged[/] {clip_id}: {'; '.join(reasons)}", soft_wrap=True)
+    for clip_id, note in summary.depth_ambiguous.items():
+        console.print(f"  [yellow]depth ambiguous[/] {clip_id}: {note}", soft_wrap=True)
     for clip_id, error in summary.failed.items():
         console.print(f"  [red]failed[/] {clip_id}: {error}", soft_wrap=True)
 

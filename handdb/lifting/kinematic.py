@@ -550,4 +550,5 @@ def lift_kinematic(uv: np.ndarray, skeleton: Skeleton, bone_lengths: np.ndarray,
             f"{np.exp(odds):.3g} times as likely as all of them flipped" if ambiguous else "")
     return LiftResult(xyz=xyz, sign_confidence=_confidence(solution, parts, skeleton.n_joints),
                       length_inconsistency=inconsistency, scale=scale, method="kinematic",
-                      mirror_ambiguous=bool(ambiguous), note=note)
+                      mirror_ambiguous=bool(ambiguous), mirror_log_odds=float(odds),
+                      note=note)

@@ -138,5 +138,5 @@ def lift_refined(uv: np.ndarray, skeleton: Skeleton, bone_lengths: np.ndarray,
     return LiftResult(xyz=refined, sign_confidence=seeded.sign_confidence,
                       length_inconsistency=inconsistency, scale=seeded.scale,
                       method="kinematic-refined", mirror_ambiguous=seeded.mirror_ambiguous,
-                      note=seeded.note)
+                      mirror_log_odds=seeded.mirror_log_odds, note=seeded.note)
 

@@ -105,6 +105,7 @@ def _joined(frames: list[LiftResult]) -> LiftResult:
     """One result from the results of frames lifted one by one, in order."""
     notes = list(dict.fromkeys(r.note for r in frames if r.note))
     ambiguous = [t for t, r in enumerate(frames) if r.mirror_ambiguous]
+    odds = [r.mirror_log_odds for r in frames if r.mirror_log_odds is not None]
     if ambiguous:
         notes.append(f"lifted image by image: the mirror is ambiguous in {len(ambiguous)} "
                      f"of {len(frames)} images (from image {ambiguous[0]})")
@@ -115,5 +116,6 @@ def _joined(frames: list[LiftResult]) -> LiftResult:
         scale=np.concatenate([r.scale for r in frames]),
         method=frames[0].method,
         mirror_ambiguous=bool(ambiguous),
+        mirror_log_odds=min(odds) if odds else None,
         note="; ".join(notes),
     )

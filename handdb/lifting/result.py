@@ -32,6 +32,10 @@ class LiftResult:
     mirror_ambiguous
         True when the clip's evidence does not settle the clip-wide mirror (every depth
         sign flipped at once); ``note`` then says so.
+    mirror_log_odds
+        Calibrated log-odds, nats, of the depth signs chosen over all of them flipped at
+        once (:mod:`handdb.lifting.evidence`); ``None`` for methods that do not weigh the
+        mirror. Lifted image by image: the least settled image's.
     note
         Human-readable remarks about the result (empty when there are none).
     """
@@ -42,4 +46,5 @@ class LiftResult:
     scale: np.ndarray
     method: str
     mirror_ambiguous: bool = False
+    mirror_log_odds: float | None = None
     note: str = ""

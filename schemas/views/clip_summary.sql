@@ -1,4 +1,4 @@
--- One line per clip: what was ingested and how much of it was observed, filled and lifted.
+-- One line per clip: what was ingested, how much of it was observed, filled and lifted, and how sure its depth is.
 CREATE OR REPLACE VIEW clip_summary AS
 SELECT
     c.clip_id,
@@ -10,6 +10,8 @@ SELECT
     c.has_truth,
     c.gap_fill_method,
     c.lift_method,
+    c.depth_ambiguous,
+    round(c.depth_log_odds, 2) AS depth_log_odds,
     round(c.n_observed / (c.n_frames * c.n_joints), 4) AS observed_share,
     j.n_filled,
     j.n_lifted

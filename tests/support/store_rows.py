@@ -24,7 +24,8 @@ def clip_row(clip_id, key="k1"):
         "cx": [None], "cy": [None], "image_width": [None], "image_height": [None],
         "n_frames": [3], "sampling": ["video"], "n_joints": [21], "n_observed": [63],
         "min_confidence": [0.5],
-        "gap_fill_method": [None], "lift_method": [None], "has_truth": [True],
+        "gap_fill_method": [None], "lift_method": [None], "depth_log_odds": [None],
+        "depth_ambiguous": [None], "lift_note": [None], "has_truth": [True],
         "flagged": [False], "flag_reasons": [[]],
         "sidecar": ["{}"], "usd_path": [None], "handdb_version": ["0"],
     })

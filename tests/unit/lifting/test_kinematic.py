@@ -7,6 +7,7 @@ from handdb.errors import BoneLengthError
 from handdb.hand.model import forward_kinematics
 from handdb.hand.skeletons import bone_length_array, load_skeleton
 from handdb.lifting import available_methods, lift
+from handdb.lifting.kinematic import MIRROR_SETTLED_ODDS
 from handdb.synthetic.clips import synthesize_clip, thesis_clench_clip
 from handdb.synthetic.hands import make_hand
 from handdb.synthetic.kinematics import PALM_TO_CAMERA
@@ -123,6 +124,7 @@ def test_mirror_ambiguity_is_reported_for_a_flat_hand():
     skeleton, lengths, xyz = tilted_flat_hand()
     result = lift(xyz[..., :2] * 2.0, skeleton, lengths, ORTHOGRAPHIC)
     assert result.mirror_ambiguous
+    assert result.mirror_log_odds < np.log(MIRROR_SETTLED_ODDS)
     assert "mirror" in result.note
     bones = skeleton.bones[:, 1]
     np.testing.assert_allclose(result.sign_confidence[:, bones], 0.5, atol=0.05)
@@ -130,7 +132,11 @@ def test_mirror_ambiguity_is_reported_for_a_flat_hand():
 
 def test_mirror_is_settled_by_a_clenching_hand():
     clip, skeleton, lengths, camera = synthetic("clench")
-    assert not lift(clip.uv, skeleton, lengths, camera, hand=clip.hand).mirror_ambiguous
+    result = lift(clip.uv, skeleton, lengths, camera, hand=clip.hand)
+    assert not result.mirror_ambiguous
+    assert result.mirror_log_odds >= np.log(MIRROR_SETTLED_ODDS)
+    thesis = lift(clip.uv, skeleton, lengths, camera, method="thesis", hand=clip.hand)
+    assert thesis.mirror_log_odds is None
 
 
 def test_inputs_are_never_mutated(rapid_clip):
