@@ -30,8 +30,6 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-from scipy.optimize import linear_sum_assignment
-from scipy.spatial.distance import cdist
 
 from handdb.clip import ClipSpec
 from handdb.errors import InputError
@@ -192,6 +190,10 @@ def _check_order_kept(people_by_file: Sequence[tuple[Path, list[dict[str, Any]]]
     InputError
         Naming the file where the order changes and the people who trade places.
     """
+    # imported here: scipy costs a rebuild with nothing to do, which scans every reader
+    from scipy.optimize import linear_sum_assignment
+    from scipy.spatial.distance import cdist
+
     previous: tuple[Path, np.ndarray] | None = None
     for path, people in people_by_file:
         if not people:

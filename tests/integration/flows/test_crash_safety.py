@@ -29,6 +29,7 @@ import pytest
 
 from handdb.store.database import LOCK_FILE
 from handdb.store.query import query
+from handdb.store.stamps import STAMPS_FILE
 from tests.support.paths import REPO
 
 pytestmark = pytest.mark.slow
@@ -44,12 +45,16 @@ KILL_SHARE = (0.1, 0.7)
 
 
 def database_digests(db: Path) -> dict[str, str]:
-    """SHA-256 of every file but the run log, the lock, ``quarantine`` and ``clips``."""
+    """SHA-256 of every file but the run log, the lock, the stamps, ``quarantine``, ``clips``.
+
+    The stamps (:mod:`handdb.store.stamps`) are a cache of what was hashed when, not content.
+    """
     skipped = {"runs", "quarantine", "clips"}
     return {
         path.relative_to(db).as_posix(): hashlib.sha256(path.read_bytes()).hexdigest()
         for path in sorted(db.rglob("*"))
-        if path.is_file() and path.parent.name not in skipped and path.name != LOCK_FILE
+        if path.is_file() and path.parent.name not in skipped
+        and path.name not in (LOCK_FILE, STAMPS_FILE)
     }
 
 

@@ -17,6 +17,7 @@ from handdb_flows.settings import quick_flows
 import handdb
 from handdb.errors import DatabaseLockedError
 from handdb.store.database import LOCK_FILE, Store
+from handdb.store.stamps import STAMPS_FILE
 from tests.support.building import run
 
 
@@ -26,13 +27,14 @@ def build(inbox: Path, db: str):
 
 
 def url_digests(url: str) -> dict[str, str]:
-    """SHA-256 of every file under ``url`` but the run log and the lock, by relative path."""
+    """SHA-256 of every file under ``url`` but the run log, the lock and the stamps (a local
+    folder's cache of what was hashed, :mod:`handdb.store.stamps`), by relative path."""
     fs, root = fsspec.core.url_to_fs(url)
     root = root.rstrip("/")
     return {
         path[len(root) + 1:]: hashlib.sha256(fs.cat_file(path)).hexdigest()
         for path in fs.find(root)
-        if "/runs/" not in path and not path.endswith(LOCK_FILE)
+        if "/runs/" not in path and not path.endswith((LOCK_FILE, STAMPS_FILE))
     }
 
 
