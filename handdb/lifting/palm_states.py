@@ -340,7 +340,7 @@ def residual_evidence(residual: np.ndarray, visible: np.ndarray) -> np.ndarray:
         :data:`PALM_NOISE_FLOOR_PX`), weighted by :data:`PALM_EVIDENCE_WEIGHT` and capped
         at :data:`PALM_EVIDENCE_CAP`; 0 where unknown.
     """
-    best = np.nanmin(residual, axis=1)
+    best = np.fmin(residual[:, 0], residual[:, 1])                        # NaN: neither
     noise = max(PALM_NOISE_FLOOR_PX, float(np.nanmedian(best))) if np.isfinite(best).any() \
         else PALM_NOISE_FLOOR_PX
     ratio = visible * (residual[:, 1] ** 2 - residual[:, 0] ** 2) / (2.0 * noise**2)

@@ -267,11 +267,13 @@ def estimate_root_depth(uv: np.ndarray, skeleton: Skeleton, bone_lengths: np.nda
     Returns
     -------
     numpy.ndarray
-        ``(T,) float64``, clip units.
+        ``(T,) float64``, clip units. A frame with no point observed bounds nothing (any
+        depth fits it) and takes its neighbours' depth.
     """
     fx, fy, _, _ = intrinsics(camera)
     focal = 0.5 * (fx + fy)
-    bound = deepest_feasible_root(camera_rays(uv, camera), focal / weak_scale, skeleton,
-                                  bone_lengths)
+    rays = camera_rays(uv, camera)
+    bound = deepest_feasible_root(rays, focal / weak_scale, skeleton, bone_lengths)
+    bound[~np.isfinite(rays).all(axis=-1).any(axis=-1)] = np.nan
     return 1.0 / smooth_scale(1.0 / bound, ROOT_DEPTH_PERCENTILE, ROOT_DEPTH_HALF_WINDOW,
                               ROOT_DEPTH_SMOOTHING_FRAMES)

@@ -52,13 +52,21 @@ def acceleration_spread(values: np.ndarray, floor: np.ndarray) -> np.ndarray:
     Returns
     -------
     numpy.ndarray
-        ``(K,) float64``: root mean square of the second differences per component. Taken
-        without sign flips, it errs large (a flip makes one large difference), so the
-        prior it sets is on the weak side.
+        ``(K,) float64``: root mean square of the second differences per component, over
+        the runs of three frames that all have some value (a dropped frame, all NaN,
+        says nothing of the motion). Taken without sign flips, it errs large (a flip makes one large
+        difference), so the prior it sets is on the weak side.
     """
-    v = np.nan_to_num(values)
-    squared = np.mean(np.diff(v, 2, axis=0) ** 2, axis=(0, 2)) if len(v) > 2 else 0.0
-    return np.sqrt(squared + floor**2)
+    if len(values) <= 2:
+        return np.sqrt(floor**2)
+    squared = np.diff(np.nan_to_num(values), 2, axis=0) ** 2
+    known = ~np.isnan(values).all(axis=2)                                 # (T, K)
+    spanned = known[:-2] & known[1:-1] & known[2:]
+    if spanned.all():
+        return np.sqrt(np.mean(squared, axis=(0, 2)) + floor**2)
+    counted = np.maximum(spanned.sum(axis=0) * values.shape[2], 1)
+    total = np.where(spanned[..., None], squared, 0.0).sum(axis=(0, 2))
+    return np.sqrt(total / counted + floor**2)
 
 
 def sign_posterior(log_odds: np.ndarray, values: np.ndarray, spread: np.ndarray) -> np.ndarray:
@@ -71,7 +79,8 @@ def sign_posterior(log_odds: np.ndarray, values: np.ndarray, spread: np.ndarray)
     values
         ``(T, K, 2, D) float64``: each chain's value under its positive and its negative
         sign (orthographically one is minus the other; through a pinhole the near and far
-        solutions differ); NaN: no value.
+        solutions differ); NaN: no value. A frame with no value at all (dropped) keeps its
+        own evidence, and the chain bridges it.
     spread
         ``(K,) float64``: standard deviation of each component's second frame-to-frame
         difference (:func:`acceleration_spread`).
@@ -114,76 +123,103 @@ def _clipped(x: float) -> float:
 
 
 @kernel
-def _acceleration_costs(values, weight, cost):
-    """Fill ``cost[t, a, b, c]``, nats, of signs ``a, b, c`` (0: +, 1: −) at ``t − 2, t − 1, t``.
+def _acceleration_costs(values, frames, weight, cost):
+    """Fill ``cost[i, a, b, c]``, nats, of signs ``a, b, c`` at chain frames ``i − 2, i − 1, i``.
 
-    ``values`` is ``(T, 2, D)``: the chain's value under each sign.
+    Signs are 0: +, 1: −. ``values`` is ``(N, 2, D)``: the chain's value under each sign
+    on the frames ``frames`` ``(N,)`` that have one. Across dropped frames the second
+    difference is the change of the mean velocity over the two steps, whose variance
+    under the constant-velocity prior grows with their summed length, so a gap weakens
+    the tie between the frames on either side of it rather than cutting or faking it.
     """
     n_frames, _, n_components = values.shape
-    for t in range(2, n_frames):
+    for i in range(2, n_frames):
+        before, after = frames[i - 1] - frames[i - 2], frames[i] - frames[i - 1]
+        unit = before == 1 and after == 1
         for a in range(2):
             for b in range(2):
                 for c in range(2):
                     total = 0.0
                     for d in range(n_components):
-                        x = (values[t, c, d] - 2.0 * values[t - 1, b, d]
-                             + values[t - 2, a, d])
+                        # Unit steps keep the plain second difference and its rounding.
+                        if unit:
+                            x = (values[i, c, d] - 2.0 * values[i - 1, b, d]
+                                 + values[i - 2, a, d])
+                        else:
+                            x = ((values[i, c, d] - values[i - 1, b, d]) / after
+                                 - (values[i - 1, b, d] - values[i - 2, a, d]) / before)
                         total += x * x
-                    cost[t, a, b, c] = weight * total
+                    cost[i, a, b, c] = weight * total if unit else \
+                        weight * total * 2.0 / (before + after)
 
 
 @kernel
 def _forward_backward(evidence, values, weight, posterior):
     """Fill ``posterior`` ``(T, K)`` as :func:`sign_posterior` returns it.
 
-    The chain's states are pairs of consecutive signs: ``forward[t, a, b]`` and
-    ``backward[t, a, b]`` are the log-messages of signs ``a`` at ``t − 1`` and ``b`` at
-    ``t`` (0: +, 1: −); ``emission[t, a]`` is frame ``t``'s own evidence for sign ``a``.
-    NaN in ``evidence`` ``(T, K)`` and ``values`` ``(T, K, 2, D)`` counts as 0.
+    Each chain runs over the frames where any of its values is known (a dropped frame,
+    all NaN, keeps its own evidence alone). The chain's states are pairs of consecutive
+    signs: ``forward[i, a, b]`` and ``backward[i, a, b]`` are the log-messages of signs
+    ``a`` at its frame ``i − 1`` and ``b`` at ``i`` (0: +, 1: −); ``emission[i, a]`` is
+    frame ``i``'s own evidence for sign ``a``. Other NaN in ``evidence`` ``(T, K)`` and
+    ``values`` ``(T, K, 2, D)`` counts as 0.
     """
-    n_frames, n_chains = evidence.shape
-    if n_frames == 1:
-        for k in range(n_chains):
-            posterior[0, k] = _clipped(_finite(evidence[0, k]))
-        return
-    cost = np.zeros((n_frames, 2, 2, 2))
-    chain = np.empty(values.shape[:1] + values.shape[2:])
-    emission = np.empty((n_frames, 2))
-    forward = np.empty((n_frames, 2, 2))
-    backward = np.zeros((n_frames, 2, 2))
+    n_total, n_chains = evidence.shape
+    n_components = values.shape[3]
+    frames = np.empty(n_total, dtype=np.int64)
+    chain = np.empty((n_total, 2, n_components))
+    cost = np.zeros((n_total, 2, 2, 2))
+    emission = np.empty((n_total, 2))
+    forward = np.empty((n_total, 2, 2))
+    backward = np.zeros((n_total, 2, 2))
     for k in range(n_chains):
-        for t in range(n_frames):
-            for sign in range(2):
-                for d in range(chain.shape[2]):
-                    chain[t, sign, d] = _finite(values[t, k, sign, d])
-        _acceleration_costs(chain, weight[k], cost)
-        for t in range(n_frames):
+        n_frames = 0
+        for t in range(n_total):
             # One frame is never surer than MAX_LOG_ODDS: unbounded evidence would let two
             # certain frames that disagree make every path impossible.
-            own = _clipped(_finite(evidence[t, k]))
-            emission[t, 0], emission[t, 1] = 0.5 * own, -0.5 * own
+            posterior[t, k] = _clipped(_finite(evidence[t, k]))
+            known = False
+            for sign in range(2):
+                for d in range(n_components):
+                    known = known or not math.isnan(values[t, k, sign, d])
+            if known or n_total == 1:
+                frames[n_frames] = t
+                n_frames += 1
+        if n_frames < 2:
+            continue
+        for i in range(n_frames):
+            t = frames[i]
+            for sign in range(2):
+                for d in range(n_components):
+                    chain[i, sign, d] = _finite(values[t, k, sign, d])
+            own = posterior[t, k]
+            emission[i, 0], emission[i, 1] = 0.5 * own, -0.5 * own
+        _acceleration_costs(chain[:n_frames], frames[:n_frames], weight[k], cost)
         for a in range(2):
             for b in range(2):
                 forward[1, a, b] = emission[0, a] + emission[1, b]
-        for t in range(2, n_frames):
+        for i in range(2, n_frames):
             for b in range(2):
                 for c in range(2):
-                    forward[t, b, c] = emission[t, c] + _log_add_exp(
-                        forward[t - 1, 0, b] - cost[t, 0, b, c],
-                        forward[t - 1, 1, b] - cost[t, 1, b, c])
-        for t in range(n_frames - 2, 0, -1):
+                    forward[i, b, c] = emission[i, c] + _log_add_exp(
+                        forward[i - 1, 0, b] - cost[i, 0, b, c],
+                        forward[i - 1, 1, b] - cost[i, 1, b, c])
+        for a in range(2):
+            for b in range(2):
+                backward[n_frames - 1, a, b] = 0.0
+        for i in range(n_frames - 2, 0, -1):
             for a in range(2):
                 for b in range(2):
-                    backward[t, a, b] = _log_add_exp(
-                        emission[t + 1, 0] - cost[t + 1, a, b, 0] + backward[t + 1, b, 0],
-                        emission[t + 1, 1] - cost[t + 1, a, b, 1] + backward[t + 1, b, 1])
-        for t in range(1, n_frames):
-            posterior[t, k] = _clipped(
-                _log_add_exp(forward[t, 0, 0] + backward[t, 0, 0],
-                             forward[t, 1, 0] + backward[t, 1, 0])
-                - _log_add_exp(forward[t, 0, 1] + backward[t, 0, 1],
-                               forward[t, 1, 1] + backward[t, 1, 1]))
-        posterior[0, k] = _clipped(
+                    backward[i, a, b] = _log_add_exp(
+                        emission[i + 1, 0] - cost[i + 1, a, b, 0] + backward[i + 1, b, 0],
+                        emission[i + 1, 1] - cost[i + 1, a, b, 1] + backward[i + 1, b, 1])
+        for i in range(1, n_frames):
+            posterior[frames[i], k] = _clipped(
+                _log_add_exp(forward[i, 0, 0] + backward[i, 0, 0],
+                             forward[i, 1, 0] + backward[i, 1, 0])
+                - _log_add_exp(forward[i, 0, 1] + backward[i, 0, 1],
+                               forward[i, 1, 1] + backward[i, 1, 1]))
+        posterior[frames[0], k] = _clipped(
             _log_add_exp(forward[1, 0, 0] + backward[1, 0, 0],
                          forward[1, 0, 1] + backward[1, 0, 1])
             - _log_add_exp(forward[1, 1, 0] + backward[1, 1, 0],
@@ -212,15 +248,46 @@ def smooth_scale(bounds: np.ndarray, percentile: float = SCALE_PERCENTILE,
     numpy.ndarray
         ``(T,) float64``: an upper percentile of the bounds in a window around each frame
         (a bound is tight only for frames where some bone lies in the image plane), then
-        Gaussian-smoothed. NaN frames take their nearest finite neighbour's bound.
+        Gaussian-smoothed. Frames without a bound (NaN) inform no other frame's scale and
+        take the scale of their nearest frames that have one.
     """
     finite = np.isfinite(bounds)
     if not finite.any():
         return np.full(bounds.shape, np.nan)
-    index = np.arange(len(bounds))
-    filled = np.interp(index, index[finite], bounds[finite])
-    upper = percentile_filter(filled, percentile, size=2 * half_window + 1, mode="nearest")
-    return gaussian_filter1d(upper, smoothing, mode="nearest")
+    if finite.all():
+        upper = percentile_filter(bounds, percentile, size=2 * half_window + 1,
+                                  mode="nearest")
+        return gaussian_filter1d(upper, smoothing, mode="nearest")
+    upper = _window_percentile(bounds, percentile, half_window)
+    known = np.isfinite(upper)
+    weight = gaussian_filter1d(known.astype(np.float64), smoothing, mode="nearest")
+    with np.errstate(invalid="ignore", divide="ignore"):
+        smoothed = gaussian_filter1d(np.where(known, upper, 0.0), smoothing,
+                                     mode="nearest") / weight
+    return _nearest_filled(np.where(known, smoothed, np.nan))
+
+
+def _window_percentile(values: np.ndarray, percentile: float, half_window: int) -> np.ndarray:
+    """The percentile of the finite ``values`` ``(T,)`` in a window around each frame.
+
+    The rank is the one :func:`scipy.ndimage.percentile_filter` takes among a window's
+    values, taken here among its finite ones; NaN where a window has none. The clip's
+    first and last values stand beyond its ends, as ``mode="nearest"`` has it.
+    """
+    padded = np.pad(values, half_window, mode="edge")
+    windows = np.sort(np.lib.stride_tricks.sliding_window_view(padded, 2 * half_window + 1),
+                      axis=1)                                             # NaN sort last
+    count = np.isfinite(windows).sum(axis=1)
+    rank = np.minimum((percentile / 100.0 * count).astype(np.int64), np.maximum(count - 1, 0))
+    chosen = windows[np.arange(len(values)), rank]
+    return np.where(count > 0, chosen, np.nan)
+
+
+def _nearest_filled(values: np.ndarray) -> np.ndarray:
+    """``values`` ``(T,)`` with NaN entries linearly interpolated from the finite ones."""
+    finite = np.isfinite(values)
+    index = np.arange(len(values))
+    return np.interp(index, index[finite], values[finite])
 
 
 def sigmoid(x: np.ndarray | float) -> np.ndarray:

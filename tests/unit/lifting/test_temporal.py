@@ -40,6 +40,53 @@ def test_sign_posterior_matches_enumeration(n_frames):
                                atol=1e-9)
 
 
+def bridged_posterior(log_odds, values, spread, frames):
+    """:func:`brute_force_posterior` over the observed ``frames`` of a longer clip.
+
+    Across dropped frames the second difference is that of the mean velocities over the
+    two steps, its variance the spread's times half their summed length.
+    """
+    n = len(frames)
+    plus, total = np.zeros(n), 0.0
+    for seq in itertools.product((0, 1), repeat=n):
+        signs = 1.0 - 2.0 * np.array(seq)
+        signed = values[frames, seq]
+        steps = np.diff(frames)[:, None]
+        acceleration = np.diff(np.diff(signed, axis=0) / steps, axis=0)
+        width = 0.5 * (steps[1:] + steps[:-1])
+        unit = width == 1.0
+        acceleration = np.where(unit, np.diff(signed, 2, axis=0), acceleration)
+        score = 0.5 * np.sum(signs * log_odds[frames])
+        score -= np.sum(acceleration**2 / width) / (2.0 * spread**2)
+        weight = np.exp(score)
+        total += weight
+        plus += weight * (signs > 0)
+    return np.log(plus) - np.log(total - plus)
+
+
+def test_the_chain_bridges_dropped_frames_by_the_observed_ones():
+    rng = np.random.default_rng(3)
+    log_odds = rng.normal(scale=2.0, size=12)
+    values = rng.normal(size=(12, 2, 3))
+    frames = np.array([0, 1, 2, 5, 6, 7, 8, 10, 11])
+    dropped = np.setdiff1d(np.arange(12), frames)
+    values[dropped] = np.nan
+    spread = 1.3
+    got = sign_posterior(log_odds[:, None], values[:, None], np.array([spread]))[:, 0]
+    np.testing.assert_allclose(got[frames],
+                               bridged_posterior(log_odds, values, spread, frames), atol=1e-9)
+    np.testing.assert_allclose(got[dropped], log_odds[dropped])
+
+
+def test_dropped_frames_do_not_widen_the_acceleration_spread():
+    depth = np.linspace(5.0, 15.0, 30)[:, None, None]
+    gapped = depth.copy()
+    gapped[10:13] = np.nan
+    floor = np.array([0.1])
+    np.testing.assert_allclose(acceleration_spread(gapped, floor),
+                               acceleration_spread(depth, floor))
+
+
 def test_a_steep_bone_keeps_its_sign_through_uninformative_frames():
     # evidence only at the start; the bone never nears the image plane afterwards
     log_odds = np.zeros(50)
