@@ -26,6 +26,9 @@ _FONT_PIXELS = 12
 _TITLE_PIXELS = 14
 #: Slant of the joint names, degrees counter-clockwise.
 _NAME_DEGREES = 60
+#: zlib level of the chart's PNG: on its flat colours level 3 finds nearly all that the
+#: default 6 does (the file under 1 % larger) in two thirds of the time.
+PNG_COMPRESS_LEVEL = 3
 #: Slanted joint names kept for later charts: every joint name of a few skeletons.
 _LABEL_CACHE = 256
 #: Share of a joint's slot the bars of all methods fill.
@@ -128,7 +131,7 @@ def draw_comparison_chart(title: str, joints: tuple[str, ...], methods: list[str
     image.paste(axis.convert("RGB"), (4, int((top + bottom - axis.height) / 2)),
                 axis.getchannel("A"))
     buffer = io.BytesIO()
-    image.save(buffer, format="PNG")
+    image.save(buffer, format="PNG", compress_level=PNG_COMPRESS_LEVEL)
     return buffer.getvalue()
 
 
