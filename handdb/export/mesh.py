@@ -25,6 +25,7 @@ Posing uses linear blend skinning with the joint transforms of
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 
 import numpy as np
@@ -58,6 +59,11 @@ HEEL_HALF_WIDTH_RATIO = 0.35
 
 #: Rings along and segments around each capsule (trimesh's ``count``).
 CAPSULE_COUNT = (10, 8)
+
+#: Least area of a capsule's smallest face, in trimesh's merge tolerances (``tol.merge``,
+#: squared units), for its mesh to be computed here rather than by trimesh: nearer that
+#: tolerance trimesh's mesh depends on the capsule's size (it drops faces).
+CAPSULE_AREA_MARGIN = 100.0
 
 #: Subdivisions of the spheres whose hull makes the palm.
 PALM_SPHERE_SUBDIVISIONS = 1
@@ -122,14 +128,65 @@ def finger_radii(skeleton: Skeleton, span: float) -> dict[str, float]:
     return {f: FINGER_RADIUS_RATIO * FINGER_RADIUS_SCALE.get(f, 1.0) * span for f in fingers}
 
 
-def _capsule(start: np.ndarray, end: np.ndarray, radius: float) -> trimesh.Trimesh:
-    """Return a capsule whose sphere centres are ``start`` and ``end``."""
+def _capsule_rings(length: float, radius: float) -> np.ndarray:
+    """A capsule's points along ``+Z`` about the origin, as trimesh computes them.
+
+    The profile (two quarter circles of ``radius``, ``length`` apart) revolved in
+    :data:`CAPSULE_COUNT` sections, with the arithmetic of ``trimesh.creation.capsule``
+    before it merges the copies of each pole: ``(S P, 3) float64``, ``length`` units, ring
+    by ring.
+    """
+    rings, sections = CAPSULE_COUNT
+    theta = np.concatenate((np.linspace(-np.pi / 2.0, 0.0, rings // 2 + 1),
+                            np.linspace(0.0, np.pi / 2.0, rings // 2 + 1)))
+    profile = np.column_stack((np.cos(theta), np.sin(theta))) * radius
+    half = len(profile) // 2
+    profile[:half, 1] -= length / 2.0
+    profile[half:, 1] += length / 2.0
+    turn = np.linspace(0.0, 2.0 * np.pi, sections + 1)[:-1]
+    around = np.column_stack((np.cos(turn), np.sin(turn)))               # (S, 2)
+    points = np.empty((sections, len(profile), 3))
+    points[..., :2] = around[:, None, :] * profile[None, :, 0, None]
+    points[..., 2] = profile[:, 1]
+    return points.reshape(-1, 3)
+
+
+@functools.cache
+def _capsule_topology() -> tuple[np.ndarray, np.ndarray]:
+    """What ``trimesh.creation.capsule`` keeps of :func:`_capsule_rings`, and its faces.
+
+    Returns the indices ``(V,) int64`` of the points it keeps (one of each pole's copies)
+    and its faces ``(F, 3) int64`` on them. They depend on :data:`CAPSULE_COUNT` alone,
+    not on the capsule's size, so one capsule built by trimesh gives them for all.
+    """
+    reference = trimesh.creation.capsule(height=1.0, radius=1.0, count=CAPSULE_COUNT)
+    rings = _capsule_rings(1.0, 1.0)
+    same = (reference.vertices[:, None, :] == rings[None]).all(axis=-1)   # (V, S P)
+    return np.argmax(same, axis=1), np.asarray(reference.faces, dtype=np.int64)
+
+
+def _capsule(start: np.ndarray, end: np.ndarray,
+             radius: float) -> tuple[np.ndarray, np.ndarray]:
+    """A capsule whose sphere centres are ``start`` and ``end``: its vertices and faces.
+
+    The mesh ``trimesh.creation.capsule`` makes, point for point, without building a
+    ``Trimesh`` for it (that costs ten times the arithmetic). A capsule whose smallest
+    face is within :data:`CAPSULE_AREA_MARGIN` of trimesh's merge tolerance is left to
+    trimesh, which drops faces and merges points at that tolerance. Returns
+    ``(V, 3) float64`` vertices in the units of ``start`` and ``(F, 3) int64`` faces.
+    """
     axis = end - start
     length = float(np.linalg.norm(axis))
     transform = trimesh.geometry.align_vectors([0.0, 0.0, 1.0], axis / length)
     transform[:3, 3] = (start + end) / 2
-    return trimesh.creation.capsule(height=length, radius=radius, count=CAPSULE_COUNT,
-                                    transform=transform)
+    kept, faces = _capsule_topology()
+    placed = trimesh.transformations.transform_points(_capsule_rings(length, radius),
+                                                      transform)[kept]
+    if trimesh.triangles.area(placed[faces]).min() > CAPSULE_AREA_MARGIN * trimesh.tol.merge:
+        return placed, faces
+    small = trimesh.creation.capsule(height=length, radius=radius, count=CAPSULE_COUNT,
+                                     transform=transform)
+    return small.vertices, np.asarray(small.faces, dtype=np.int64)
 
 
 def hand_mesh(skeleton: Skeleton, bone_lengths: np.ndarray) -> HandMesh:
@@ -155,14 +212,14 @@ def hand_mesh(skeleton: Skeleton, bone_lengths: np.ndarray) -> HandMesh:
     parts, indices, weights, face_joints = [], [], [], []
     for parent, child in bones:
         radius = radii[skeleton.fingers[child]]
-        capsule = _capsule(rest[parent], rest[child], radius)
+        vertices, faces = _capsule(rest[parent], rest[child], radius)
         direction = (rest[child] - rest[parent]) / bone_lengths[child]
-        along = (capsule.vertices - rest[parent]) @ direction
+        along = (vertices - rest[parent]) @ direction
         own = np.clip(0.5 + along / (2 * radius), 0.0, 1.0)
-        parts.append(capsule)
-        indices.append(np.tile([parent, skeleton.parents[parent]], (len(capsule.vertices), 1)))
+        parts.append((vertices, faces))
+        indices.append(np.tile([parent, skeleton.parents[parent]], (len(vertices), 1)))
         weights.append(np.stack([own, 1.0 - own], axis=1))
-        face_joints.append(np.full(len(capsule.faces), child))
+        face_joints.append(np.full(len(faces), child))
 
     wrist, _ = palm_joints(skeleton)
     heel = rest[wrist] + np.outer([-1.0, 1.0], [HEEL_HALF_WIDTH_RATIO * span, 0.0, 0.0])
@@ -172,16 +229,16 @@ def hand_mesh(skeleton: Skeleton, bone_lengths: np.ndarray) -> HandMesh:
                                         radius=PALM_RADIUS_RATIO * span)
     cloud = (centres[:, None, :] + sphere.vertices[None]).reshape(-1, 3)
     palm = trimesh.convex.convex_hull(cloud)
-    parts.append(palm)
+    parts.append((palm.vertices, palm.faces))
     indices.append(np.tile([skeleton.root, skeleton.root], (len(palm.vertices), 1)))
     weights.append(np.tile([1.0, 0.0], (len(palm.vertices), 1)))
     face_joints.append(np.full(len(palm.faces), skeleton.root))
 
-    offsets = np.cumsum([0] + [len(p.vertices) for p in parts[:-1]])
+    offsets = np.cumsum([0] + [len(vertices) for vertices, _ in parts[:-1]])
     return HandMesh(
-        vertices=np.concatenate([p.vertices for p in parts]),
+        vertices=np.concatenate([vertices for vertices, _ in parts]),
         faces=np.concatenate(
-            [p.faces + o for p, o in zip(parts, offsets, strict=True)]).astype(np.int64),
+            [faces + o for (_, faces), o in zip(parts, offsets, strict=True)]).astype(np.int64),
         joint_indices=np.concatenate(indices).astype(np.int64),
         joint_weights=np.concatenate(weights),
         face_joints=np.concatenate(face_joints).astype(np.int64),

@@ -28,7 +28,8 @@ still hand seen from one direction does not. Each frame's two poses, with their
 reprojection residuals, are then the palm's two tilt states
 (:mod:`handdb.lifting.palm_states`).
 
-The pose fits run in compiled kernels (:mod:`handdb.compiled`), one frame at a time.
+The pose fits and the template update run in compiled kernels (:mod:`handdb.compiled`),
+one frame at a time.
 """
 
 from __future__ import annotations
@@ -273,8 +274,10 @@ def _polish_pose(centred, shape, weight, rotation, scale, scratch):
     """Levenberg-Marquardt over a pose's rotation (left increment) and scale, in place.
 
     ``rotation`` ``(3, 3)`` and ``scale`` ``(1,)`` are updated; returns the root mean
-    square image residual per visible joint, pixels. ``scratch`` ``(8, 4, 4)`` is work
-    space.
+    square image residual per visible joint, pixels. ``weight`` is 1 for a visible joint
+    and 0 otherwise, so visible joints enter the normal equations unweighted, and only
+    their lower triangle is formed: it is all :func:`_solve_spd4` reads. ``scratch``
+    ``(8, 4, 4)`` is work space.
     """
     s = scale[0]
     cost = _pose_cost(centred, shape, weight, rotation, s)
@@ -300,9 +303,9 @@ def _polish_pose(centred, shape, weight, rotation, scale, scratch):
                 jac[3] = -posed[a]
                 e = centred[k, a] - s * posed[a]
                 for i in range(4):
-                    gradient[i] += weight[k] * jac[i] * e
-                    for j in range(4):
-                        normal[i, j] += weight[k] * jac[i] * jac[j]
+                    gradient[i] += jac[i] * e
+                    for j in range(i + 1):
+                        normal[i, j] += jac[i] * jac[j]
         for i in range(4):
             normal[i, i] *= 1.0 + damping
         _solve_spd4(normal, gradient, step, low)
@@ -507,14 +510,52 @@ def _alternate(points: np.ndarray, centred: np.ndarray, template: np.ndarray,
     """
     tilts = fit_tilts(points, template)
     ok = np.isfinite(tilts.residual[:, 0])
-    rows = tilts.scale[ok, 0, None, None] * tilts.rotation[ok, 0, :2, :]  # (N, 2, 3)
-    shape = template - template.mean(axis=0)
-    error = np.linalg.norm(centred[ok] - np.einsum("nai,ki->nka", rows, shape), axis=-1)
-    weight = np.minimum(1.0, HUBER_PX / np.maximum(error, np.finfo(float).tiny))  # (N, K)
-    normal = np.einsum("nk,nai,naj->kij", weight, rows, rows)           # (K, 3, 3)
-    moment = np.einsum("nk,nai,nka->ki", weight, rows, centred[ok])
-    ridge = TEMPLATE_RIDGE * np.trace(normal, axis1=1, axis2=2) / 3.0
-    solved = np.linalg.solve(normal + ridge[:, None, None] * np.eye(3),
-                             (moment + ridge[:, None] * shape)[..., None])[..., 0]
+    solved = _agreed_points(centred, tilts.rotation, tilts.scale, ok,
+                            template - template.mean(axis=0))
     return (on_bone_spheres(solved - solved[0], parents, lengths),
             float(np.mean(tilts.residual[ok, 0])))
+
+
+@kernel
+def _agreed_points(centred, rotation, scale, ok, shape):
+    """Each joint's least-squares template point from its image points in every posed frame.
+
+    ``centred`` ``(N, K, 2)`` pixels; ``rotation`` ``(N, 2, 3, 3)`` and ``scale``
+    ``(N, 2)`` are :class:`Tilts`' (the better pose is used), ``ok`` ``(N,)`` the frames
+    that have one; ``shape`` ``(K, 3)`` is the template about its centroid. A joint's
+    image residual beyond :data:`HUBER_PX` lowers its weight as 1/residual; the ridge
+    (:data:`TEMPLATE_RIDGE`) pulls toward ``shape``. Returns ``(K, 3)``, clip units.
+    """
+    n_frames, n_joints, _ = centred.shape
+    normal = np.zeros((n_joints, 3, 3))
+    moment = np.zeros((n_joints, 3))
+    rows = np.empty((2, 3))
+    tiny = np.finfo(np.float64).tiny
+    for t in range(n_frames):
+        if not ok[t]:
+            continue
+        for a in range(2):
+            for i in range(3):
+                rows[a, i] = scale[t, 0] * rotation[t, 0, a, i]
+        for k in range(n_joints):
+            squared = 0.0
+            for a in range(2):
+                # x, z, y: the order numpy's einsum summed the projection in before this
+                # kernel, which keeps the templates of earlier builds bit for bit
+                e = centred[t, k, a] - (rows[a, 0] * shape[k, 0] + rows[a, 2] * shape[k, 2]
+                                        + rows[a, 1] * shape[k, 1])
+                squared += e * e
+            weight = min(1.0, HUBER_PX / max(math.sqrt(squared), tiny))
+            for a in range(2):
+                for i in range(3):
+                    moment[k, i] += weight * rows[a, i] * centred[t, k, a]
+                    for j in range(3):
+                        normal[k, i, j] += weight * rows[a, i] * rows[a, j]
+    solved = np.empty((n_joints, 3))
+    for k in range(n_joints):
+        ridge = TEMPLATE_RIDGE * (normal[k, 0, 0] + normal[k, 1, 1] + normal[k, 2, 2]) / 3.0
+        for i in range(3):
+            normal[k, i, i] += ridge
+            moment[k, i] += ridge * shape[k, i]
+        solved[k] = np.linalg.solve(normal[k], moment[k])
+    return solved

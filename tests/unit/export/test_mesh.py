@@ -1,8 +1,16 @@
 import numpy as np
 import pytest
+import trimesh
 
 from handdb.clip import METERS_PER_UNIT
-from handdb.export.mesh import hand_mesh, knuckle_span, posed_hand_mesh, posed_vertices
+from handdb.export.mesh import (
+    CAPSULE_COUNT,
+    _capsule,
+    hand_mesh,
+    knuckle_span,
+    posed_hand_mesh,
+    posed_vertices,
+)
 from handdb.export.rotations import palm_joints, rest_positions
 from handdb.hand.skeletons import bone_length_array, load_skeleton
 from handdb.synthetic import thesis_clench_clip
@@ -115,3 +123,21 @@ def test_the_palm_and_fingers_have_a_hands_proportions(hand):
         name = skeleton.joints[child]
         assert radius >= 0.13 * span, name
         assert radius * mm >= 5.5, name                          # no hair-thin finger
+
+
+@pytest.mark.parametrize("size", [2e-4, 1e-3, 0.02, 1.0, 30.0])
+def test_capsules_are_trimesh_capsules_point_for_point(size):
+    # metres to millimetres, and below a millimetre where trimesh drops faces
+    rng = np.random.default_rng(int(size * 1e4))
+    for _ in range(10):
+        start = rng.normal(size=3) * size
+        end = start + rng.normal(size=3) * size
+        radius = size * rng.uniform(0.1, 0.6)
+        vertices, faces = _capsule(start, end, radius)
+        length = float(np.linalg.norm(end - start))
+        transform = trimesh.geometry.align_vectors([0.0, 0.0, 1.0], (end - start) / length)
+        transform[:3, 3] = (start + end) / 2
+        expected = trimesh.creation.capsule(height=length, radius=radius,
+                                            count=CAPSULE_COUNT, transform=transform)
+        assert np.array_equal(vertices, expected.vertices)
+        assert np.array_equal(faces, expected.faces)

@@ -85,3 +85,20 @@ def test_truth_is_drawn_faintly_root_on_root():
     # the clip's own bones are drawn over the truth
     assert _count(overlaid, FINGER_RGB["thumb"]) == _count(thumbnail_image(skeleton, xyz, 3),
                                                            FINGER_RGB["thumb"])
+
+
+def test_png_holds_the_drawn_pixels_in_a_palette(tmp_path):
+    skeleton = load_skeleton("mediapipe21")
+    motion = make_hinge_motion(skeleton, n_frames=30)
+    filled = np.zeros(motion.xyz.shape[:2], bool)
+    filled[::3, 8] = True
+    root = motion.xyz[:, skeleton.root:skeleton.root + 1]
+    truth = (motion.xyz - root) * 1.15 + root   # a larger hand, showing beneath
+    path = write_thumbnail_png(tmp_path / "clip.png", skeleton=skeleton, xyz=motion.xyz,
+                               count=4, filled=filled, truth=truth)
+    with Image.open(path) as png:
+        assert png.mode == "P"
+        pixels = np.asarray(png.convert("RGB"))
+    drawn = thumbnail_image(skeleton, motion.xyz, 4, filled=filled, truth=truth)
+    assert np.array_equal(pixels, drawn)
+    assert _count(drawn, FILLED_RGB) > 0 and _count(drawn, TRUTH_RGB) > 0
