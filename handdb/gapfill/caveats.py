@@ -62,8 +62,7 @@ def fill_caveats(result: FillResult, skeleton: Skeleton) -> tuple[str, ...]:
         A joint never detected and how it was placed (``"little_tip never detected:
         placed by the hand model (rest-pose)"``), then the frames left without positions
         (``"2 of 9 frames (0-1) observe no point and were not filled: stored without
-        positions"``); empty when the
-        fill knew everything it filled.
+        positions"``); empty when the fill knew everything it filled.
     """
     caveats = [_never_detected(result, skeleton, flag.joint)
                for flag in result.flags_of(WHOLE_CLIP)]
