@@ -43,7 +43,8 @@ def test_off_a_terminal_each_event_is_one_plain_line(inbox_with_a_refusal, tmp_p
     assert any(line.startswith("alpha: done (") for line in lines)
     assert output.count(REASON) == 1
     total, work = timing(output)
-    assert total >= work > 0
+    # a short clip on warm stages takes under the 0.1 s the summary shows
+    assert total >= work >= 0
 
 
 @pytest.mark.slow
