@@ -11,7 +11,7 @@ import numpy as np
 
 from handdb.gapfill.auto import MODEL_RULES
 from handdb.gapfill.gaps import find_gaps
-from handdb.gapfill.registry import WHOLE_CLIP, FillResult
+from handdb.gapfill.registry import FillResult
 from handdb.hand.skeletons import Skeleton
 
 #: Runs of frames named in a caveat, at most.
@@ -41,6 +41,16 @@ def _never_detected(result: FillResult, skeleton: Skeleton, joint: str) -> str:
     return f"{joint} never detected: {how} ({', '.join(rules)}){where}"
 
 
+def never_detected(result: FillResult) -> np.ndarray:
+    """``(J,) bool``: the joints no frame observed (each point filled or left missing).
+
+    Read from the arrays, not the fill's notes, so a fill read back from the store (which
+    keeps no notes) says the same.
+    """
+    observed = ~result.filled & np.isfinite(result.uv).all(axis=-1)
+    return ~observed.any(axis=0)
+
+
 def empty_frames(result: FillResult) -> np.ndarray:
     """``(T,) bool``: the frames left without any position (none observed, none filled)."""
     return ~np.isfinite(result.uv).any(axis=(1, 2))
@@ -64,8 +74,8 @@ def fill_caveats(result: FillResult, skeleton: Skeleton) -> tuple[str, ...]:
         (``"2 of 9 frames (0-1) observe no point and were not filled: stored without
         positions"``); empty when the fill knew everything it filled.
     """
-    caveats = [_never_detected(result, skeleton, flag.joint)
-               for flag in result.flags_of(WHOLE_CLIP)]
+    caveats = [_never_detected(result, skeleton, skeleton.joints[j])
+               for j in np.flatnonzero(never_detected(result))]
     empty = empty_frames(result)
     if empty.any():
         caveats.append(f"{int(empty.sum())} of {empty.size} frames ({_runs(empty)}) observe "

@@ -32,11 +32,13 @@ def autocorrelation_time(series: np.ndarray) -> np.ndarray:
     numpy.ndarray
         ``(S,) float64`` in ``[1, T]``: ``1 + 2 sum_k rho_k`` over the initial positive
         sequence of the autocorrelations ``rho_k`` paired as ``rho_2m + rho_2m+1``; 1 for
-        a constant series or a single frame (nothing says the frames are alike).
+        a constant series, a single frame or none (nothing says the frames are alike).
     """
     n_frames, n_series = series.shape
+    if n_frames < 2:
+        return np.ones(n_series)
     centred = series - series.mean(axis=0)
-    size = 2 ** int(np.ceil(np.log2(2 * max(n_frames, 1))))
+    size = 2 ** int(np.ceil(np.log2(2 * n_frames)))
     spectrum = np.fft.rfft(centred, n=size, axis=0)
     covariance = np.fft.irfft(spectrum * np.conj(spectrum), n=size, axis=0)[:n_frames]
     tau = np.ones(n_series)
@@ -46,7 +48,7 @@ def autocorrelation_time(series: np.ndarray) -> np.ndarray:
         stop = np.flatnonzero(pairs <= 0)
         kept = pairs[: stop[0] if stop.size else len(pairs)]
         tau[s] = 2.0 * kept.sum() - 1.0
-    return np.clip(tau, 1.0, max(n_frames, 1))
+    return np.clip(tau, 1.0, n_frames)
 
 
 @dataclass(frozen=True)

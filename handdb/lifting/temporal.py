@@ -182,7 +182,7 @@ def _forward_backward(evidence, values, weight, posterior):
             for sign in range(2):
                 for d in range(n_components):
                     known = known or not math.isnan(values[t, k, sign, d])
-            if known or n_total == 1:
+            if known:
                 frames[n_frames] = t
                 n_frames += 1
         if n_frames < 2:
@@ -264,7 +264,7 @@ def smooth_scale(bounds: np.ndarray, percentile: float = SCALE_PERCENTILE,
     with np.errstate(invalid="ignore", divide="ignore"):
         smoothed = gaussian_filter1d(np.where(known, upper, 0.0), smoothing,
                                      mode="nearest") / weight
-    return _nearest_filled(np.where(known, smoothed, np.nan))
+    return _interpolated(np.where(known, smoothed, np.nan))
 
 
 def _window_percentile(values: np.ndarray, percentile: float, half_window: int) -> np.ndarray:
@@ -283,7 +283,7 @@ def _window_percentile(values: np.ndarray, percentile: float, half_window: int) 
     return np.where(count > 0, chosen, np.nan)
 
 
-def _nearest_filled(values: np.ndarray) -> np.ndarray:
+def _interpolated(values: np.ndarray) -> np.ndarray:
     """``values`` ``(T,)`` with NaN entries linearly interpolated from the finite ones."""
     finite = np.isfinite(values)
     index = np.arange(len(values))

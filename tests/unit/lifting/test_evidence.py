@@ -21,9 +21,10 @@ def test_autocorrelation_time_of_an_ar1_series(phi):
     assert tau == pytest.approx(max((1 + phi) / (1 - phi), 1.0), rel=0.2)
 
 
-def test_a_constant_series_or_a_single_frame_counts_every_frame():
+def test_a_constant_series_a_single_frame_or_none_counts_every_frame():
     assert autocorrelation_time(np.full((50, 2), 3.0)).tolist() == [1.0, 1.0]
     assert autocorrelation_time(np.array([[2.0]])).tolist() == [1.0]
+    assert autocorrelation_time(np.empty((0, 3))).tolist() == [1.0, 1.0, 1.0]
 
 
 def test_repeating_every_frame_adds_no_evidence():
