@@ -150,7 +150,7 @@ def read(path: str | Path, spec: ClipSpec, skeleton: Skeleton) -> Observations:
             raise table.error(int(row), "xy"[axis], f"{xy[row, axis]:g} lies far outside the "
                               f"image (normalised coordinates lie within [{low}, {high}]); "
                               'are these pixels? Set "coordinates": "pixels" in the sidecar')
-        by_frame = np.full((int(frame.max()) + 1, hand.n_joints, 2), np.nan)
+        by_frame = np.full((int(frame.max()) + 1, skeleton.n_joints, 2), np.nan)
         by_frame[frame, joint] = xy
         check_not_world(by_frame[np.isfinite(by_frame).any(axis=(1, 2))], path, "x")
     uv = xy * scale

@@ -4,6 +4,7 @@ import numpy as np
 import pytest
 
 from handdb.errors import InputError
+from handdb.hand.skeletons import load_skeleton
 from handdb.ingest import mediapipe, mediapipe_csv, mediapipe_world
 from tests.unit.ingest.conftest import hand_track
 from tests.unit.ingest.test_markers_csv import SKELETON, marker_spec
@@ -169,3 +170,12 @@ def test_a_hand_that_passes_the_image_corner_is_read(tmp_path, spec_for, mediapi
     obs = read_csv(tmp_path, spec_for, mediapipe21, landmark_rows(xy))
     assert obs.n_rows == 6 * 21
     np.testing.assert_allclose(obs.uv[:21], xy[0] * [640, 480], atol=1e-3)
+
+
+def test_landmarks_are_read_into_a_skeleton_with_more_joints(tmp_path, spec_for):
+    dhg22 = load_skeleton("dhg22")
+    path = tmp_path / "clip.mediapipe.csv"
+    path.write_text(long_csv(hands=(0,)))
+    obs = mediapipe_csv.read(path, spec_for(tmp_path, image=IMAGE, skeleton="dhg22"), dhg22)
+    assert obs.n_frames == 2 and obs.n_rows == 42
+    assert obs.joint.max() == dhg22.index("little_tip") == 21
