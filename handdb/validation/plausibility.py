@@ -281,10 +281,11 @@ def persistent_frames(frames: np.ndarray) -> np.ndarray:
     numpy.ndarray
         ``(T,) bool``: a running majority, the clip's ends mirrored: a lone frame drops
         out, a run of two or more stays, and frames alternating in and out stay. A clip
-        of one frame is that frame.
+        shorter than the window is judged frame by frame (mirroring two frames would swap
+        them; scipy mirrors a single frame from memory beyond it).
     """
-    if len(frames) < 2:
-        return frames.copy()  # scipy mirrors a single frame from memory beyond it
+    if len(frames) < PERSISTENCE_FRAMES:
+        return frames.copy()
     return median_filter(frames, size=PERSISTENCE_FRAMES, mode="mirror")
 
 

@@ -148,6 +148,12 @@ def test_a_single_frame_clip_is_judged_by_its_frame_alone(clip):
                    for _ in range(50))
 
 
+def test_a_clip_shorter_than_the_window_is_judged_frame_by_frame():
+    for frames in ([True, False], [False, True], [True, True], [False, False]):
+        assert persistent_frames(np.array(frames)).tolist() == frames
+    assert persistent_frames(np.array([True, False, False])).tolist() == [False] * 3
+
+
 def test_a_bone_that_stretches_is_flagged(clip):
     xyz = clip.xyz.copy()
     tip, dip = MEDIAPIPE.indices(["index_tip", "index_dip"])
