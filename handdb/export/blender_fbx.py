@@ -21,6 +21,7 @@ scene is in metres).
 """
 
 import json
+import os
 import sys
 
 import bpy
@@ -56,6 +57,8 @@ def convert_batch(batch: str) -> int:
                     int(entry["n_frames"]), entry["clip_id"])
         except Exception as error:  # noqa: BLE001 - reported by clip; the others still run
             failures[entry["clip_id"]] = f"{type(error).__name__}: {' '.join(str(error).split())}"
+            if os.path.exists(entry["target"]):  # what the exporter wrote before failing
+                os.remove(entry["target"])
     with open(listed["failures"], "w") as handle:
         json.dump(failures, handle)
     return len(failures)

@@ -167,12 +167,15 @@ def convert_to_fbx(conversions: Sequence[FbxConversion]) -> dict[str, str]:
                 "Blender did not finish the FBX conversion of "
                 f"{', '.join(c.clip_id for c in conversions)} in "
                 f"{BLENDER_TIMEOUT_S * len(conversions):g} s") from None
-        reasons = json.loads(reported.read_text()) if reported.is_file() else {}
+        # no report: Blender died mid-batch, and a file it was writing may be cut short
+        finished = reported.is_file()
+        reasons = json.loads(reported.read_text()) if finished else {}
     tail = "\n".join((run.stdout + run.stderr).strip().splitlines()[-QUOTED_LINES:])
     return {c.clip_id: reasons.get(c.clip_id) or (
-                f"Blender ({command[0]}, exit status {run.returncode}) wrote no FBX "
+                f"Blender ({command[0]}, exit status {run.returncode}) wrote no complete FBX "
                 f"file:\n{tail}")
-            for c in conversions if not c.target.is_file()}
+            for c in conversions
+            if not finished or c.clip_id in reasons or not c.target.is_file()}
 
 
 def export_clip_fbx(

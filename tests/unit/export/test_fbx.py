@@ -1,6 +1,8 @@
 """FBX export finds Blender, or says exactly how to get it (the conversion itself is tested
 with Blender in tests/integration/blender)."""
 
+import sys
+
 import pytest
 from typer.testing import CliRunner
 
@@ -98,3 +100,21 @@ def test_a_batch_is_one_conversion_and_a_failed_clip_is_named_after_the_others(
     assert result.stdout.split() == [str(out / "alpha.fbx"), str(out / "charlie.fbx")]
     assert "clip bravo: RuntimeError: Bad glTF" in result.stderr
     assert sorted(p.name for p in out.iterdir()) == ["alpha.fbx", "charlie.fbx"]
+
+
+def test_a_blender_that_dies_mid_batch_leaves_no_clip_converted(monkeypatch, tmp_path):
+    """A file Blender was writing when it died may be cut short: no clip counts as written."""
+    crash = ("import json, sys; batch = json.load(open(sys.argv[2])); "
+             "open(batch['conversions'][0]['target'], 'wb').write(b'Kaydara FBX'); "
+             "sys.exit(139)")
+    program = tmp_path / "python3.11"
+    program.write_text(f"#!/bin/sh\nexec {sys.executable} -c \"{crash}\" \"$@\"\n")
+    program.chmod(0o755)
+    monkeypatch.setenv(BLENDER_VARIABLE, str(program))
+    conversions = [fbx.FbxConversion(clip_id=name, source=tmp_path / f"{name}.glb",
+                                     target=tmp_path / f"{name}.fbx", fps=30.0, n_frames=2)
+                   for name in ("first", "second")]
+    failed = fbx.convert_to_fbx(conversions)
+    assert (tmp_path / "first.fbx").is_file()
+    assert sorted(failed) == ["first", "second"]
+    assert "exit status 139" in failed["first"]
