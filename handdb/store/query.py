@@ -99,11 +99,20 @@ class ParquetScan:
         self.filesystem = filesystem
 
     def batches(self) -> Iterator[pa.RecordBatch]:
-        """Every file's record batches in turn, in :attr:`schema`."""
+        """Every file's record batches in turn, in :attr:`schema`.
+
+        A column the file lacks (written under an older contract) is null, as a
+        ``pyarrow.dataset`` over the same files gives it.
+        """
         for path in self.files:
             reader = pq.ParquetFile(path, filesystem=self.filesystem)
-            for batch in reader.iter_batches(columns=self.schema.names):
-                yield batch.cast(self.schema)
+            present = set(reader.schema_arrow.names)
+            names = [name for name in self.schema.names if name in present]
+            for batch in reader.iter_batches(columns=names):
+                yield pa.RecordBatch.from_arrays(
+                    [batch.column(f.name).cast(f.type) if f.name in present
+                     else pa.nulls(batch.num_rows, f.type) for f in self.schema],
+                    schema=self.schema)
 
     def __arrow_c_schema__(self) -> Any:
         """The rows' schema, as an Arrow C schema capsule."""

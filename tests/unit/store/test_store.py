@@ -130,6 +130,20 @@ def test_a_view_gives_the_same_rows_at_every_scan_either_way_it_reads(tmp_path, 
             [("INTEGER", "DOUBLE")]
 
 
+@pytest.mark.parametrize("pruned_from", [query_module.PRUNED_SCAN_BYTES, 0],
+                         ids=["parquet-scan", "pyarrow-dataset"])
+def test_a_file_of_an_older_contract_reads_its_missing_column_as_null(tmp_path, monkeypatch,
+                                                                       pruned_from):
+    monkeypatch.setattr(query_module, "PRUNED_SCAN_BYTES", pruned_from)
+    store = Store(str(tmp_path / "db"))
+    store.write("truth_3d", "a", truth_rows("a", 3))
+    [path] = store.table_files("truth_3d")
+    pq.write_table(pq.read_table(path).drop_columns(["z"]), path)
+    with connect(store, read_only=True) as con:
+        assert con.sql("SELECT count(*), count(z), sum(x) FROM truth_3d").fetchall() == [
+            (3, 0, 3.0)]
+
+
 def test_remote_filesystem_url(tmp_path):
     store = Store("memory://handdb-test-db")
     store.commit_clip("a", {"clips": clip_row("a"), "truth_3d": truth_rows("a", 4)})
