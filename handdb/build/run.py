@@ -57,7 +57,8 @@ process_clip = LazyFunction("handdb.build.process:process_clip")
 class BuildSummary:
     """What a build did, for the command line, the artifacts and the ``runs`` table.
 
-    ``flagged`` maps each clip no hand could produce to the reasons; ``depth_ambiguous``
+    ``flagged`` maps each flagged clip (one no hand could produce, or one the hand model
+    completed where the input showed nothing) to the reasons; ``depth_ambiguous``
     each clip whose depth pose is not settled against its mirror image to the lifting's
     note (the clip is plausible: its ``clips`` row has ``depth_ambiguous`` true).
     ``flow_run_id`` and ``flow_run_url`` are the orchestrator's run of the build and its

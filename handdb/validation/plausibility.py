@@ -114,11 +114,13 @@ class Verdict:
     Attributes
     ----------
     reasons
-        Every reason the clip is implausible, in words; empty when it is plausible.
+        Every reason the clip is flagged, in words; empty when nothing is: what no hand
+        could produce, and (added by the build, :func:`handdb.gapfill.caveats.fill_caveats`)
+        what the input never showed and the hand model placed or left empty.
     rows
         ``(T, J) bool``: the frames and joints at fault: a frame that breaks an angle or
         residual limit, a bone (by its child joint) whose length or constancy is
-        implausible.
+        implausible, a point placed without evidence.
     """
 
     reasons: tuple[str, ...]
@@ -126,7 +128,7 @@ class Verdict:
 
     @property
     def flagged(self) -> bool:
-        """The clip is implausible."""
+        """The clip carries a reason to doubt it (:attr:`reasons`)."""
         return bool(self.reasons)
 
 

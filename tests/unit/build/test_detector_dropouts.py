@@ -59,7 +59,7 @@ def _check_stored(db, clip_id, reasons):
     placed = _rows(db, clip_id, f"joint = '{NEVER_FOUND}' AND frame >= 2")
     assert len(placed) == N_FRAMES - 2
     assert all(r["filled"] and r["fill_method"] in ("chord", "rest-pose")
-               and r["x"] is not None for r in placed)
+               and r["x"] is not None and r["flagged"] for r in placed)
     leading = _rows(db, clip_id, "frame < 2")
     assert leading and all(r["x"] is None and r["flagged"] and not r["filled"]
                            for r in leading)
