@@ -26,6 +26,11 @@ from dataclasses import dataclass
 #: File of the database folder holding the entries, as JSON.
 STAMPS_FILE = ".stamps.json"
 
+#: Version of the digests kept: raise it when what a digest covers or how it is computed
+#: changes (an inbox clip's content hash, a stored file's fingerprint), so that entries
+#: made before are not taken for today's.
+STAMPS_VERSION = 1
+
 #: How long before its stamp a file must have last changed to be settled, nanoseconds:
 #: more than the coarsest time step of the file systems a database lives on (FAT's 2 s).
 SETTLED_NS = 3 * 10**9
@@ -102,15 +107,18 @@ def entry_if_settled(files: Sequence[str], stamps: Sequence[Stamp | None], diges
 def load_stamps(path: str) -> dict[str, Hashed]:
     """The entries kept at ``path``; none when the file is missing or does not read.
 
-    The file is only a shortcut: a damaged one costs a build its hashing, nothing else.
+    The file is only a shortcut: a damaged one, or one written for another
+    :data:`STAMPS_VERSION`, costs a build its hashing, nothing else.
     """
     try:
         with open(path, encoding="utf-8") as fh:
             kept = json.load(fh)
+        if kept.get("version") != STAMPS_VERSION:
+            return {}
         entries = {key: Hashed(files=tuple(value["files"]),
                                stamps=tuple(_as_stamp(s) for s in value["stamps"]),
                                digest=str(value["digest"]))
-                   for key, value in kept.items()}
+                   for key, value in kept["entries"].items()}
     except (OSError, ValueError, KeyError, TypeError, AttributeError):
         return {}
     return {key: entry for key, entry in entries.items()
@@ -126,6 +134,7 @@ def save_stamps(path: str, entries: Mapping[str, Hashed]) -> None:
     """Keep ``entries`` at ``path``, written aside and renamed into place."""
     aside = f"{path}.tmp"
     with open(aside, "w", encoding="utf-8") as fh:
-        json.dump({key: {"files": list(e.files), "stamps": [list(s) for s in e.stamps],
-                         "digest": e.digest} for key, e in sorted(entries.items())}, fh)
+        json.dump({"version": STAMPS_VERSION, "entries": {
+            key: {"files": list(e.files), "stamps": [list(s) for s in e.stamps],
+                  "digest": e.digest} for key, e in sorted(entries.items())}}, fh)
     os.replace(aside, path)

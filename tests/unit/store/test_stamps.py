@@ -77,6 +77,16 @@ def test_entries_are_kept_and_a_damaged_file_of_them_is_no_entry(tmp_path):
     assert stamps.load_stamps(str(kept)) == {}
 
 
+def test_entries_of_another_version_are_no_entry(tmp_path, monkeypatch):
+    path = tmp_path / "a.bin"
+    path.write_bytes(b"abcd")
+    entry = stamps.entry_if_settled([str(path)], [stamps.stamp(str(path))], "digest", _later())
+    kept = tmp_path / stamps.STAMPS_FILE
+    stamps.save_stamps(str(kept), {"key": entry})
+    monkeypatch.setattr(stamps, "STAMPS_VERSION", stamps.STAMPS_VERSION + 1)
+    assert stamps.load_stamps(str(kept)) == {}
+
+
 def test_a_stored_file_damaged_in_place_is_noticed_despite_its_stamp(tmp_path, settle_at_once):
     store = Store(str(tmp_path / "db"))
     store.commit_clip("a", {"clips": clip_row("a"), "truth_3d": truth_rows("a", 3)})
