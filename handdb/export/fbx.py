@@ -42,9 +42,11 @@ FBX_SUFFIX = ".fbx"
 #: Environment variable naming Blender: an executable, or a Python with ``bpy``.
 BLENDER_VARIABLE = "HANDDB_BLENDER"
 
-#: Seconds Blender may take per clip of a batch; a few seconds per clip on two cores, most
-#: of it Blender's start-up, paid once per batch.
-BLENDER_TIMEOUT_S = 600.0
+#: Seconds Blender may take to start, once per batch, and then per clip: it starts in 1-2 s
+#: and converts a clip in under one on two cores, so a hung Blender is found in minutes, not
+#: after hours of a large batch.
+BLENDER_START_TIMEOUT_S = 300.0
+BLENDER_CLIP_TIMEOUT_S = 60.0
 
 #: The script Blender runs.
 CONVERTER = Path(__file__).with_name("blender_fbx.py")
@@ -148,11 +150,13 @@ def convert_to_fbx(conversions: Sequence[FbxConversion]) -> dict[str, str]:
     MissingToolError
         If Blender is not installed (the message says how to get it).
     StageError
-        If Blender did not finish within :data:`BLENDER_TIMEOUT_S` seconds per clip.
+        If Blender did not finish within :data:`BLENDER_START_TIMEOUT_S` seconds and
+        :data:`BLENDER_CLIP_TIMEOUT_S` per clip.
     """
     if not conversions:
         return {}
     command = blender_command()
+    timeout = BLENDER_START_TIMEOUT_S + BLENDER_CLIP_TIMEOUT_S * len(conversions)
     with tempfile.TemporaryDirectory(prefix="handdb-fbx-") as tmp:
         listed, reported = Path(tmp) / "batch.json", Path(tmp) / "failures.json"
         listed.write_text(json.dumps({"failures": str(reported), "conversions": [
@@ -161,12 +165,12 @@ def convert_to_fbx(conversions: Sequence[FbxConversion]) -> dict[str, str]:
         try:
             run = subprocess.run([*command, *_script_arguments(command, [str(listed)])],
                                  capture_output=True, text=True, check=False,
-                                 timeout=BLENDER_TIMEOUT_S * len(conversions))
+                                 timeout=timeout)
         except subprocess.TimeoutExpired:
             raise StageError(
                 "Blender did not finish the FBX conversion of "
                 f"{', '.join(c.clip_id for c in conversions)} in "
-                f"{BLENDER_TIMEOUT_S * len(conversions):g} s") from None
+                f"{timeout:g} s") from None
         # no report: Blender died mid-batch, and a file it was writing may be cut short
         finished = reported.is_file()
         reasons = json.loads(reported.read_text()) if finished else {}
