@@ -49,7 +49,7 @@ del _module
 
 #: Version of reading the inbox's files into a clip. Raise it when a change alters the output; it
 #: enters the build keys (:mod:`handdb.build.keys`), a docstring edit or a speed-up does not.
-VERSION = 4
+VERSION = 5
 
 __all__ = [
     "ClipEntry",

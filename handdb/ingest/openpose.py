@@ -55,6 +55,11 @@ HAND_KEYS = {"right": "hand_right_keypoints_2d", "left": "hand_left_keypoints_2d
 
 KEYPOINT_FILE = re.compile(r"(\d+)_keypoints\.json$")
 
+#: Pixels between the centres of two listed people below which they are one person found
+#: twice (OpenPose's duplicate detections overlap): which of the two an index picks is the
+#: same person either way, so their order is never a trade of places.
+SAME_PERSON_PX = 20.0
+
 
 
 def frame_files(folder: Path) -> list[tuple[int, Path]]:
@@ -183,7 +188,8 @@ def _check_order_kept(people_by_file: Sequence[tuple[Path, list[dict[str, Any]]]
     may follow one person, then another. The people are matched between consecutive files
     with people by their keypoints' centres (:func:`scipy.optimize.linear_sum_assignment`);
     they traded places when the best match is not the listed order and beats it by more
-    than the distance between the two nearest people: a jump noise cannot make.
+    than the distance between the two nearest people (and :data:`SAME_PERSON_PX`): a jump
+    noise cannot make.
 
     Raises
     ------
@@ -206,7 +212,7 @@ def _check_order_kept(people_by_file: Sequence[tuple[Path, list[dict[str, Any]]]
             listed = float(np.trace(cost))
             best = float(cost[rows, columns].sum())
             separation = float(np.min(cdist(before, before)[~np.eye(len(before), dtype=bool)]))
-            if listed - best > separation:
+            if listed - best > max(separation, SAME_PERSON_PX):
                 was = int(rows[columns != rows][0])
                 raise InputError(path, f"people[{columns[was]}] here is people[{was}] "
                                  f"of {before_path.name}: OpenPose ran without --tracking and "

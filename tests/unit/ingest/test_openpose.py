@@ -154,3 +154,21 @@ def test_people_who_keep_their_places_are_read_by_index(tmp_path, spec_for, medi
     obs = openpose.read(folder, spec_for(tmp_path, person=1), mediapipe21)
     wrists = obs.uv[obs.joint == 0]
     np.testing.assert_allclose(wrists[:, 0], 400.0 + step * np.arange(6))
+
+
+def test_one_person_detected_twice_is_read_whichever_is_listed_first(tmp_path, spec_for,
+                                                                     mediapipe21):
+    """OpenPose's duplicate detections, a pixel apart and listed in either order, are one
+    signer: their order is never refused as a trade of places."""
+    folder = tmp_path / "clip.openpose"
+    jitter = np.random.default_rng(0).normal(scale=0.5, size=(6, 2))
+    for frame, order in enumerate([(0, 1), (1, 0)] * 3):
+        copies = []
+        for offset in (0.0, 1.0):
+            points = np.tile([200.0 + offset + jitter[frame, 0], 200.0 + jitter[frame, 1],
+                              0.9], 21)
+            points[0::3] += np.arange(21)
+            copies.append({"person_id": [-1], "hand_right_keypoints_2d": points.tolist()})
+        keypoint_file(folder, frame, [copies[k] for k in order])
+    obs = openpose.read(folder, spec_for(tmp_path, person=1), mediapipe21)
+    assert obs.n_frames == 6
