@@ -7,7 +7,9 @@
    palm frame (:mod:`handdb.gapfill.palm_frame`), where only finger bending is left to
    bridge.
 2. Palm points (wrist, finger bases) stand still there: every gap of theirs is bridged by
-   interpolation and held at the clip's ends, which makes a rigid-body fill.
+   interpolation and held at the clip's ends, which makes a rigid-body fill; a second
+   rigid-body fill carries the point from its gap's edges with the palm points seen there
+   (:func:`palm_gap_fill`), and the two are weighed per joint by validation, as in 4.
 3. Finger points in interior gaps of at most ``short_gap`` frames: PCHIP interpolation;
    so are, in the image, all the points of a frame that observes none.
 4. Finger points in longer, leading or trailing gaps: two estimates from the other joints,
@@ -59,6 +61,7 @@ from handdb.gapfill.registry import MethodOutput
 from handdb.gapfill.regression import regression_estimates, regression_samples
 from handdb.gapfill.rigid import (
     MIN_PALM_POINTS,
+    carried_points,
     carry_along_chains_many,
     palm_joints,
     place_from_rest_pose,
@@ -271,6 +274,69 @@ def edge_validation_mask(missing: np.ndarray, gaps: Gaps) -> np.ndarray:
     return hidden
 
 
+def validation_trials(missing: np.ndarray, gaps: Gaps) -> tuple[np.ndarray, np.ndarray, Gaps]:
+    """The trials that weigh estimates of ``gaps``: observed runs hidden on purpose.
+
+    Parameters
+    ----------
+    missing
+        ``(T, J) bool``.
+    gaps
+        The gaps to be filled (of ``missing``).
+
+    Returns
+    -------
+    hidden
+        ``(T, J) bool``: the observed points hidden (:func:`validation_mask` and
+        :func:`edge_validation_mask`).
+    trial_missing
+        ``missing | hidden``.
+    trial_gaps
+        The gaps of ``trial_missing`` holding a hidden point (a hidden run, or one merged
+        with the real gap beside it), to be scored on their hidden points only.
+    """
+    hidden = validation_mask(missing, gaps) | edge_validation_mask(missing, gaps)
+    trial_missing = missing | hidden
+    trial_gaps = find_gaps(trial_missing)
+    hidden_so_far = np.concatenate([np.zeros((1, missing.shape[1]), dtype=np.int64),
+                                    np.cumsum(hidden, axis=0)])
+    trial_gaps = trial_gaps.select((hidden_so_far[trial_gaps.stop, trial_gaps.joint]
+                                    > hidden_so_far[trial_gaps.start, trial_gaps.joint])
+                                   & ~trial_gaps.whole_clip)
+    return hidden, trial_missing, trial_gaps
+
+
+def validation_weights(trials: Sequence[np.ndarray], truth: np.ndarray, hidden: np.ndarray,
+                       trial_gaps: Gaps) -> np.ndarray:
+    """Weigh estimates per joint, inversely to their squared error on the trials.
+
+    Parameters
+    ----------
+    trials
+        Per estimate, ``(N, 2) float64``: its values at the points of
+        ``trial_gaps.frames()``, in order.
+    truth
+        ``(T, J, 2) float64``: the tracks, read at the hidden points (the same units as
+        ``trials``).
+    hidden, trial_gaps
+        From :func:`validation_trials`.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(E, J) float64``: each estimate's weight per joint, summing to 1 over the
+        estimates; equal weights for a joint with no hidden point.
+    """
+    _, trial_frame, trial_joint = trial_gaps.frames()
+    scored = hidden[trial_frame, trial_joint]
+    seen = truth[trial_frame[scored], trial_joint[scored]]
+    errors = np.array([np.bincount(trial_joint[scored],
+                                   np.sum((trial[scored] - seen) ** 2, axis=-1),
+                                   minlength=hidden.shape[1]) for trial in trials])
+    inverse = 1.0 / np.maximum(errors, np.finfo(float).tiny)
+    return np.where(hidden.any(axis=0), inverse / inverse.sum(axis=0), 1.0 / len(trials))
+
+
 def _long_gap_fill(
     local: np.ndarray, filled: np.ndarray, missing: np.ndarray, gaps: Gaps,
     skeleton: Skeleton, rule: str, variance: float,
@@ -281,29 +347,71 @@ def _long_gap_fill(
         blended[frame, joint] = estimate_long_gaps((rule,), local, filled, [(missing, gaps)],
                                                    skeleton, variance)[0][0]
         return blended
-    hidden = validation_mask(missing, gaps) | edge_validation_mask(missing, gaps)
-    trial_missing = missing | hidden
-    trial_gaps = find_gaps(trial_missing)
-    hidden_so_far = np.concatenate([np.zeros((1, missing.shape[1]), dtype=np.int64),
-                                    np.cumsum(hidden, axis=0)])
-    # The trials: the gaps holding a hidden point (a hidden run, or one merged with the real
-    # gap beside it), scored on their hidden points only.
-    trial_gaps = trial_gaps.select((hidden_so_far[trial_gaps.stop, trial_gaps.joint]
-                                    > hidden_so_far[trial_gaps.start, trial_gaps.joint])
-                                   & ~trial_gaps.whole_clip)
+    hidden, trial_missing, trial_gaps = validation_trials(missing, gaps)
     trials, estimates = estimate_long_gaps(VALIDATED_ESTIMATES, local, filled,
                                            [(trial_missing, trial_gaps), (missing, gaps)],
                                            skeleton, variance)
-    _, trial_frame, trial_joint = trial_gaps.frames()
-    scored = hidden[trial_frame, trial_joint]
-    truth = local[trial_frame[scored], trial_joint[scored]]
-    errors = np.array([np.bincount(trial_joint[scored],
-                                   np.sum((trial[scored] - truth) ** 2, axis=-1),
-                                   minlength=missing.shape[1]) for trial in trials])
-    inverse = 1.0 / np.maximum(errors, np.finfo(float).tiny)
-    weights = np.where(hidden.any(axis=0), inverse / inverse.sum(axis=0), 1.0 / len(trials))
+    weights = validation_weights(trials, local, hidden, trial_gaps)
     blended[frame, joint] = np.sum(weights[:, joint, None] * np.stack(estimates), axis=0)
     return blended
+
+
+def palm_gap_fill(
+    tracks: np.ndarray, in_palm_frame: np.ndarray, missing: np.ndarray, gaps: Gaps,
+    skeleton: Skeleton,
+) -> np.ndarray:
+    """Fill the gaps of palm points by two rigid-body fills, weighed by validation.
+
+    Both carry a palm point with the other palm points. One holds it still in the palm
+    frame (:mod:`~handdb.gapfill.palm_frame`, whose map is fitted to the clip's median palm
+    shape); the other carries it from each edge of its gap by the map of the palm points
+    seen at that edge and in the frame (:func:`~handdb.gapfill.rigid.carried_points`),
+    which follows the palm's shape as it is around the gap: a detector's palm, whose
+    points shift against each other as the hand turns, or a palm seen through a pinhole,
+    is not one affine shape over a whole clip. They are weighed per joint, as the long
+    finger gaps are, by how well each refills observed runs of the joint hidden on purpose
+    (:func:`validation_trials`; the palm's map is fitted again without them).
+
+    Parameters
+    ----------
+    tracks
+        ``(T, J, 2) float64``, pixels: the tracks filled from (smoothed), finite where
+        observed.
+    in_palm_frame
+        ``(T, J, 2) float64``, pixels: ``tracks`` with the points of ``gaps`` filled in the
+        palm frame and mapped to the image.
+    missing
+        ``(T, J) bool``: the points to fill from others.
+    gaps
+        The palm points' gaps, none of them a whole clip.
+    skeleton
+        The clip's skeleton.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(T, J, 2) float64``: ``in_palm_frame`` with the points of ``gaps`` replaced by
+        the weighed fill, pixels.
+    """
+    hidden, trial_missing, trial_gaps = validation_trials(missing, gaps)
+    trial_motion = palm_motion(tracks, trial_missing, skeleton)
+    if trial_motion is None or not len(trial_gaps):
+        return in_palm_frame
+    palm = palm_joints(skeleton)
+    trial_carried, carried = carried_points(
+        [(np.where(trial_missing[..., None], np.nan, tracks), trial_missing, trial_gaps),
+         (np.where(missing[..., None], np.nan, tracks), missing, gaps)], palm)
+    trial_local = interpolate_gaps(
+        np.where(trial_missing[..., None], np.nan, to_palm_frame(tracks, trial_motion)),
+        trial_missing, "pchip")
+    _, trial_frame, trial_joint = trial_gaps.frames()
+    trial_held = to_image(trial_local[trial_frame, trial_joint], trial_motion, trial_frame)
+    weights = validation_weights([trial_held, trial_carried], tracks, hidden, trial_gaps)
+    _, frame, joint = gaps.frames()
+    filled = in_palm_frame.copy()
+    filled[frame, joint] = (weights[0, joint, None] * in_palm_frame[frame, joint]
+                            + weights[1, joint, None] * carried)
+    return filled
 
 
 def check_placeable(missing: np.ndarray, skeleton: Skeleton, never_seen: np.ndarray) -> None:
@@ -463,6 +571,8 @@ def _fill_track(
     frame, joint = mask_points(unknown)
     filled[frame, joint] = (filled_local[frame, joint] if motion is None
                             else to_image(filled_local[frame, joint], motion, frame))
+    if motion is not None and (partial & palm).any():
+        filled = palm_gap_fill(placed, filled, unknown, gaps.select(partial & palm), skeleton)
 
     labels = np.zeros(missing.shape, dtype=f"<U{max(map(len, RULE_LABELS))}")
     for rule, chosen in (("rigid", partial & palm), ("pchip", partial & ~palm & short),

@@ -4,8 +4,13 @@ The palm points (:func:`~handdb.gapfill.rigid.palm_joints`) move nearly as one r
 which an orthographic camera shows as a 2D affine map per frame. :func:`palm_motion` finds
 that map for every frame: it fits the observed palm points to a reference palm (the median
 palm shape of the frames that show the whole palm, found by aligning them to the rest pose,
-then to that median), and
-interpolates the map's six parameters over time in frames with fewer than three palm points.
+then to that median), and interpolates the map's six parameters over time in frames with
+fewer than three palm points, correcting them by a similarity. A frame showing exactly three
+palm points is treated the same way when other frames of the clip show more: an affine map
+through three points is exact (six equations, six parameters), so it passes through their
+detector noise and carries it, magnified, to every palm point it places (the further from
+the three, the more: a knuckle beside a thin wrist-thumb-index triangle moved by 50 px under
+3 px of noise on the MediaPipe clips).
 Expressed in the palm frame (:func:`to_palm_frame`), palm points stand still and finger
 points move only as the fingers bend: gaps there are far easier to bridge.
 """
@@ -29,6 +34,10 @@ from handdb.gapfill.transfer import (
 )
 from handdb.hand.skeletons import Skeleton
 
+#: Points an affine map fits exactly: six equations for its six parameters, none to spare
+#: against noise.
+EXACT_AFFINE_POINTS = 3
+
 
 @dataclass(frozen=True)
 class PalmMotion:
@@ -42,7 +51,8 @@ class PalmMotion:
         ``(T, 2) float64``, pixels: image = ``linear @ palm_frame + offset``.
     fitted
         ``(T,) bool``: fitted to the frame's own palm points, at least three and not in a
-        line (else interpolated in time and corrected).
+        line, and more than :data:`EXACT_AFFINE_POINTS` if any frame shows that many (else
+        interpolated in time and corrected).
     """
 
     linear: np.ndarray
@@ -108,6 +118,9 @@ def palm_motion(uv: np.ndarray, missing: np.ndarray, skeleton: Skeleton) -> Palm
         reference = np.where(seen_once[:, None], _median(canonical), reference)
     linear, offset, kind = fit_maps_from_shape(reference, points, seen)
     fitted = kind == AFFINE
+    spare = seen.sum(axis=1) > EXACT_AFFINE_POINTS
+    if (fitted & spare).any():
+        fitted &= spare
     if not fitted.any():
         return None
     linear = _interpolate_in_time(linear, fitted)

@@ -59,8 +59,9 @@ def _carriers_of(basis: np.ndarray, joint: np.ndarray) -> tuple[np.ndarray, np.n
     return carriers[joint], np.take_along_axis(rows, carriers, axis=1)[joint]
 
 
-def _carried(
-    problems: Sequence[tuple[np.ndarray, np.ndarray, Gaps]], basis: np.ndarray, affine: bool
+def carried_points(
+    problems: Sequence[tuple[np.ndarray, np.ndarray, Gaps]], basis: np.ndarray,
+    affine: bool = True,
 ) -> list[np.ndarray]:
     """Carry the points of gaps from both edges of each gap, and blend.
 
@@ -135,7 +136,7 @@ def carry_across_gaps(
     """
     _, frame, joint = gaps.frames()
     filled = uv.copy()
-    filled[frame, joint] = _carried([(uv, missing, gaps)], basis, affine)[0]
+    filled[frame, joint] = carried_points([(uv, missing, gaps)], basis, affine)[0]
     return filled
 
 
