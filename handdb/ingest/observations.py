@@ -15,7 +15,7 @@ from pathlib import Path
 
 import numpy as np
 
-from handdb.clip import VIDEO, ClipSpec
+from handdb.clip import VIDEO, ClipSpec, finite_points
 from handdb.errors import InputError
 from handdb.hand.skeletons import Skeleton
 from handdb.ingest.limits import (
@@ -372,7 +372,7 @@ class Observations(_Rows):
             At the point farthest from the origin, saying how to give pixels.
         """
         uv = self.uv
-        seen = np.flatnonzero(np.isfinite(uv).all(axis=1))
+        seen = np.flatnonzero(finite_points(uv))
         if not seen.size or np.abs(uv[seen]).max() > NORMALISED_BOUND:
             return
         row = int(seen[np.argmax(np.abs(uv[seen]).max(axis=1))])

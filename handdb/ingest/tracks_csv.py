@@ -13,7 +13,7 @@ from pathlib import Path
 import numpy as np
 import pyarrow as pa
 
-from handdb.clip import ClipSpec
+from handdb.clip import ClipSpec, finite_points
 from handdb.hand.skeletons import Skeleton
 from handdb.ingest.delimited import write_csv
 from handdb.ingest.long_csv import FRAME_TYPE, joint_rows, read_long_csv
@@ -65,7 +65,7 @@ def read(path: str | Path, spec: ClipSpec, skeleton: Skeleton) -> Observations:
 
 def reported(uv: np.ndarray, confidence: np.ndarray | None) -> np.ndarray:
     """``(T, J) bool``: points a file should carry (a position or a confidence)."""
-    present = np.isfinite(uv).all(axis=-1)
+    present = finite_points(uv)
     return present if confidence is None else present | np.isfinite(confidence)
 
 
