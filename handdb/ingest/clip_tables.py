@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pyarrow as pa
 
-from handdb.clip import Clip
+from handdb.clip import Clip, finite_points
 from handdb.store.tables import from_columns, labels
 
 
@@ -17,7 +17,7 @@ def tracks_2d_table(clip: Clip) -> pa.Table:
     gives none. Points below ``min_confidence`` are kept: ``tracks_2d`` is the record of
     the input, not of what counts as observed.
     """
-    frame, joint = np.nonzero(np.isfinite(clip.uv).all(axis=-1)
+    frame, joint = np.nonzero(finite_points(clip.uv)
                               | np.isfinite(clip.confidence))
     return from_columns("tracks_2d", {
         "clip_id": clip.clip_id,
@@ -37,7 +37,7 @@ def truth_3d_table(clip: Clip) -> pa.Table | None:
     """
     if clip.truth is None:
         return None
-    frame, joint = np.nonzero(np.isfinite(clip.truth).all(axis=-1))
+    frame, joint = np.nonzero(finite_points(clip.truth))
     return from_columns("truth_3d", {
         "clip_id": clip.clip_id,
         "frame": frame,

@@ -4,10 +4,17 @@ pyarrow parses the file in one pass; the line of each data row is found by numpy
 raw bytes, so a row that fails a vectorised check can be reported by its 1-based line in
 the file without a Python loop over rows. Fields are delimited plainly: a field may be
 quoted but may not contain the delimiter or a line break.
+
+A file whose data rows are plain (no quote, no blank line among them, no carriage return
+but before a line feed) is first read with the columns a reader names already parsed to
+numbers, its lines following the header one for one. Only when that read fails, or finds
+a value the checks would refuse, is the file read again as strings, which is what says
+where and why it is wrong.
 """
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -34,6 +41,9 @@ _UTF16_MARKS = (b"\xff\xfe", b"\xfe\xff")
 #: A delimiter no text line holds, to read each line as one cell.
 _UNUSED_DELIMITER = "\x1f"
 
+#: The only cell a typed read takes for a missing value: an empty one.
+_EMPTY_CELL = [""]
+
 
 def read_bytes(path: Path) -> bytes:
     """Return the bytes of the text file ``path``.
@@ -46,7 +56,7 @@ def read_bytes(path: Path) -> bytes:
         lines with carriage returns alone, or holds a NUL byte.
     """
     data = read_input(path)
-    if not data.strip():
+    if not data or data.isspace():
         raise InputError(path, "is empty")
     if data.startswith(_UTF16_MARKS):
         raise InputError(path, "is UTF-16 text; save it as UTF-8")
@@ -79,6 +89,30 @@ class TextLines:
         has_cr = (end > start) & (buf[np.maximum(end - 1, 0)] == _CARRIAGE_RETURN)
         return cls(start=start, end=end - has_cr)
 
+    @staticmethod
+    def leading(data: bytes, count: int) -> list[tuple[int, int, int]]:
+        """The first ``count`` non-blank lines of ``data``, as :meth:`of` splits it.
+
+        Found without splitting the whole text: for a file's header.
+
+        Returns
+        -------
+        list of (int, int, int)
+            Each line's 1-based number and byte span (start, end); fewer than ``count``
+            when ``data`` holds fewer.
+        """
+        found: list[tuple[int, int, int]] = []
+        number, start = 0, 0
+        while len(found) < count and start < len(data):
+            stop = data.find(b"\n", start)
+            stop = len(data) if stop < 0 else stop
+            number += 1
+            end = stop - (stop > start and data[stop - 1] == _CARRIAGE_RETURN)
+            if end > start:
+                found.append((number, start, end))
+            start = stop + 1
+        return found
+
     @property
     def nonblank(self) -> np.ndarray:
         """1-based numbers of the lines that are not empty, ``(K,) int64``."""
@@ -100,7 +134,9 @@ class DelimitedTable:
     path
         The file.
     columns
-        Column name -> ``pyarrow.StringArray`` of the cells, whitespace trimmed.
+        Column name -> the cells: a ``pyarrow.StringArray``, whitespace trimmed, or the
+        values already parsed (``int64``, ``float64``, null for an empty cell) when the
+        file was read typed (:func:`read_delimited`'s ``types``).
     line
         ``(N,) int64``, 1-based line of each row in the file.
     """
@@ -146,6 +182,25 @@ class DelimitedTable:
             first empty cell when ``allow_empty`` is false.
         """
         cells = self.columns[column]
+        if pa.types.is_floating(cells.type):
+            values = cells.to_numpy(zero_copy_only=False)
+            is_empty = cells.is_null().to_numpy(zero_copy_only=False)
+        else:
+            values, is_empty = self._parse_numbers(column)
+        if not allow_empty and is_empty.any():
+            row = int(np.flatnonzero(is_empty)[0])
+            raise self.error(row, column, "is empty; a value is required")
+        return values
+
+    def _parse_numbers(self, column: str) -> tuple[np.ndarray, np.ndarray]:
+        """The string cells of ``column`` as ``(N,) float64`` and ``(N,) bool`` empty.
+
+        Raises
+        ------
+        InputError
+            At the first cell that is not a finite number.
+        """
+        cells = self.columns[column]
         empty = pc.equal(cells, "")
         try:
             values = pc.cast(pc.if_else(empty, None, cells), pa.float64())
@@ -160,10 +215,7 @@ class DelimitedTable:
             row = int(non_finite[0])
             raise self.error(row, column, f"{quoted(cells[row].as_py())} is not a finite "
                              "number; leave the cell empty for a missing point")
-        if not allow_empty and is_empty.any():
-            row = int(np.flatnonzero(is_empty)[0])
-            raise self.error(row, column, "is empty; a value is required")
-        return values
+        return values, is_empty
 
     def frames(self, column: str) -> np.ndarray:
         """Parse ``column`` as frame numbers (whole, from 0), ``(N,) int64``.
@@ -251,9 +303,72 @@ def unnamed_placeholders(names: list[str]) -> list[str]:
     return [name or f"{UNNAMED_PREFIX}{k}" for k, name in enumerate(names)]
 
 
+def _has_empty(cells: pa.Array) -> bool:
+    """Whether a cell of ``cells`` (strings or parsed values) is empty.
+
+    pyarrow reads a blank line as a row of empty cells, where the string read skips it: a
+    typed read whose first column has an empty cell may hold one.
+    """
+    if cells.null_count:
+        return True
+    return pa.types.is_string(cells.type) and bool(pc.any(pc.equal(cells, "")).as_py())
+
+
+def _read_plain(path: Path, data: bytes, *, names: list[str], header_lines: int,
+                delimiter: str, types: Mapping[str, pa.DataType]) -> DelimitedTable | None:
+    """:func:`read_delimited` in one typed pass, for a file whose data rows are plain.
+
+    ``None`` when the file may not be plain (a quote, a carriage return but before a line
+    feed, an empty cell in the first column, which a blank line gives, no line after the
+    header), when pyarrow refuses a cell, or when a parsed value is one the checks refuse
+    (an empty frame, a number that is not finite): the string read then says where and
+    why. A plain file's rows are its lines after the header, one for one.
+    """
+    if b'"' in data or (b"\r" in data and data.count(b"\r") != data.count(b"\r\n")):
+        return None
+    last_line, first_data = 0, 0
+    if header_lines:
+        header = TextLines.leading(data, header_lines)
+        if len(header) < header_lines:
+            return None
+        last_line, _, end = header[-1]
+        first_data = data.find(b"\n", end) + 1
+        if not 0 < first_data < len(data):
+            return None
+    try:
+        table = pacsv.read_csv(
+            pa.BufferReader(pa.py_buffer(data).slice(first_data)),
+            read_options=pacsv.ReadOptions(column_names=names),
+            parse_options=pacsv.ParseOptions(delimiter=delimiter, quote_char=False,
+                                             ignore_empty_lines=False),
+            convert_options=pacsv.ConvertOptions(
+                column_types={name: types.get(name, pa.string()) for name in names},
+                null_values=_EMPTY_CELL, strings_can_be_null=False),
+        )
+    except pa.ArrowInvalid:
+        return None
+    columns = {}
+    for name in names:
+        cells = table.column(name).combine_chunks()
+        if pa.types.is_string(cells.type):
+            cells = pc.utf8_trim_whitespace(cells)
+        elif pa.types.is_integer(cells.type) and cells.null_count:
+            return None
+        elif pa.types.is_floating(cells.type) and (
+                np.count_nonzero(~np.isfinite(cells.to_numpy(zero_copy_only=False)))
+                != cells.null_count):
+            return None
+        columns[name] = cells
+    if _has_empty(columns[names[0]]):
+        return None
+    line = np.arange(last_line + 1, last_line + 1 + table.num_rows, dtype=np.int64)
+    return DelimitedTable(path=path, columns=columns, line=line)
+
+
 def read_delimited(path: Path, data: bytes, *, names: list[str], header_lines: int,
-                   delimiter: str = ",") -> DelimitedTable:
-    """Parse the data rows of ``data`` (the bytes of ``path``) as strings.
+                   delimiter: str = ",", types: Mapping[str, pa.DataType] | None = None
+                   ) -> DelimitedTable:
+    """Parse the data rows of ``data`` (the bytes of ``path``).
 
     Parameters
     ----------
@@ -267,12 +382,34 @@ def read_delimited(path: Path, data: bytes, *, names: list[str], header_lines: i
         Number of non-blank lines before the first data row.
     delimiter
         The single-character field delimiter.
+    types
+        Columns to parse while reading (``pa.int64()``, ``pa.float64()``), when every
+        cell of the file parses; they are read as strings otherwise, as the other
+        columns are, and :meth:`DelimitedTable.numbers` and :meth:`~DelimitedTable.frames`
+        parse them, naming the first bad cell.
 
     Raises
     ------
     InputError
         At the first row with too few or too many cells (a truncated file), or for
         text that is not UTF-8.
+    """
+    plain = _read_plain(path, data, names=names, header_lines=header_lines,
+                        delimiter=delimiter, types=types or {})
+    if plain is not None:
+        return plain
+    return read_strings(path, data, names=names, header_lines=header_lines,
+                        delimiter=delimiter)
+
+
+def read_strings(path: Path, data: bytes, *, names: list[str], header_lines: int,
+                 delimiter: str = ",") -> DelimitedTable:
+    """:func:`read_delimited` of any file, every column as strings, lines found by numpy.
+
+    Raises
+    ------
+    InputError
+        As :func:`read_delimited` does.
     """
     lines = TextLines.of(data)
     nonblank = lines.nonblank

@@ -23,7 +23,7 @@ from pathlib import Path
 
 import numpy as np
 
-from handdb.clip import Clip, ClipSpec
+from handdb.clip import Clip, ClipSpec, finite_points
 from handdb.errors import InputError
 from handdb.hand.skeletons import load_skeleton
 from handdb.ingest.limits import (
@@ -377,7 +377,7 @@ def load_clip(entry: ClipEntry, content_hash: str | None = None) -> Clip:
         skeleton = load_skeleton(spec.skeleton)
         observations = track_format.read(entry.tracks, spec, skeleton)
         points = observations.xyz if three_d else observations.uv
-        if not np.isfinite(points).all(axis=1).any():
+        if not finite_points(points).any():
             raise InputError(entry.tracks, "holds no point of the hand in any frame")
         if truth_format is not None:
             truth_rows = truth_format.read(entry.truth, spec, skeleton)

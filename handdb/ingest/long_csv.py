@@ -6,6 +6,7 @@ formats, ground truth and 3D markers (``frame,joint,x,y,z``).
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from pathlib import Path
 
 import numpy as np
@@ -28,9 +29,12 @@ from handdb.ingest.limits import quoted
 from handdb.ingest.observations import Positions, resolve_names, single_file_rows
 
 
-def read_long_csv(path: Path, required: tuple[str, ...],
-                  optional: tuple[str, ...] = ()) -> DelimitedTable:
+def read_long_csv(path: Path, required: tuple[str, ...], optional: tuple[str, ...] = (),
+                  types: Mapping[str, pa.DataType] | None = None) -> DelimitedTable:
     """Read a CSV whose header names ``required`` and possibly ``optional`` columns.
+
+    ``types`` names the columns to parse while reading, as
+    :func:`~handdb.ingest.delimited.read_delimited` takes them.
 
     Raises
     ------
@@ -41,9 +45,8 @@ def read_long_csv(path: Path, required: tuple[str, ...],
         index, a spreadsheet's trailing empty columns) are read but never used.
     """
     data = read_bytes(path)
-    lines = TextLines.of(data)
-    header_line = int(lines.nonblank[0])
-    header = split_header(data[lines.start[header_line - 1]:lines.end[header_line - 1]], ",")
+    [(header_line, start, end)] = TextLines.leading(data, 1)
+    header = split_header(data[start:end], ",")
     check_separator(path, header, header_line)
     accepted = ", ".join(required) + "".join(f"[, {name}]" for name in optional)
     for name in header:
@@ -57,7 +60,8 @@ def read_long_csv(path: Path, required: tuple[str, ...],
         if name not in header:
             raise InputError(path, f"the header lacks column '{name}'; it must be {accepted}",
                              line=header_line, field=name)
-    table = read_delimited(path, data, names=unnamed_placeholders(header), header_lines=1)
+    table = read_delimited(path, data, names=unnamed_placeholders(header), header_lines=1,
+                           types=types)
     if not table.n_rows:
         raise InputError(path, "has a header but no data rows", line=header_line)
     return table
@@ -85,16 +89,21 @@ def joint_rows(table: DelimitedTable, column: str, spec: ClipSpec, skeleton: Ske
         At the first row of a name that is unknown or maps to a joint another name has.
     """
     names, codes = table.dictionary(column)
-    _, first_row = np.unique(codes, return_index=True)
     indices = resolve_names(names, spec, skeleton, table.path,
-                            lambda k: (int(table.line[first_row[k]]), column))
+                            lambda k: (int(table.line[np.argmax(codes == k)]), column))
     joint = indices[codes]
     keep = joint >= 0
+    if keep.all():
+        return table, joint, frozenset(names)
     return table.take(keep), joint[keep], frozenset(names)
 
 
 #: Columns of the long-form 3D formats (ground truth, 3D markers).
 POSITION_COLUMNS = ("frame", "joint", "x", "y", "z")
+
+#: What the long-form formats' frame and coordinate columns hold, to parse while reading.
+FRAME_TYPE = {"frame": pa.int64()}
+POSITION_TYPES = FRAME_TYPE | dict.fromkeys("xyz", pa.float64())
 
 
 def read_positions(path: str | Path, spec: ClipSpec, skeleton: Skeleton) -> Positions:
@@ -109,7 +118,8 @@ def read_positions(path: str | Path, spec: ClipSpec, skeleton: Skeleton) -> Posi
         ``joint_map`` ignores are dropped first.
     """
     path = Path(path)
-    table, joint, names = joint_rows(read_long_csv(path, POSITION_COLUMNS), "joint", spec,
+    table, joint, names = joint_rows(read_long_csv(path, POSITION_COLUMNS,
+                                                   types=POSITION_TYPES), "joint", spec,
                                      skeleton)
     frame = table.frames("frame")
     source, files = single_file_rows(path, table.n_rows)

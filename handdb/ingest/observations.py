@@ -15,7 +15,7 @@ from pathlib import Path
 
 import numpy as np
 
-from handdb.clip import VIDEO, ClipSpec
+from handdb.clip import VIDEO, ClipSpec, finite_points
 from handdb.errors import InputError
 from handdb.hand.skeletons import Skeleton
 from handdb.ingest.limits import (
@@ -152,6 +152,16 @@ def check_joint_map_keys(spec: ClipSpec, named: Mapping[str, Collection[str]]) -
                              f"(it names {shown})", field="joint_map", clip_id=spec.clip_id)
 
 
+def _distinct(values: np.ndarray) -> np.ndarray:
+    """The distinct ``values`` in ascending order (``numpy.unique``).
+
+    Rows in file order are usually in frame order already, and then need no sort.
+    """
+    if values.size and np.all(values[1:] >= values[:-1]):
+        return values[np.concatenate([[True], values[1:] != values[:-1]])]
+    return np.unique(values)
+
+
 @dataclass(frozen=True, kw_only=True)
 class _Rows:
     """Row bookkeeping shared by :class:`Observations` and :class:`Positions`."""
@@ -213,6 +223,8 @@ class _Rows:
             raise ValueError(f"n_frames must not exceed MAX_FRAMES ({MAX_FRAMES})")
         self._check_dense()
         key = self.frame * self.skeleton.n_joints + self.joint
+        if np.all(key[1:] > key[:-1]):
+            return
         order = np.argsort(key, kind="stable")
         repeated = np.flatnonzero(key[order][1:] == key[order][:-1])
         if repeated.size:
@@ -230,7 +242,7 @@ class _Rows:
 
         See ``limits.is_sparse`` and ``limits.is_stray_run``.
         """
-        filled = np.unique(self.frame)
+        filled = _distinct(self.frame)
         if self.n_rows and is_sparse(filled.size, self.n_frames):
             row = int(np.argmax(self.frame))
             raise self.error(
@@ -360,7 +372,7 @@ class Observations(_Rows):
             At the point farthest from the origin, saying how to give pixels.
         """
         uv = self.uv
-        seen = np.flatnonzero(np.isfinite(uv).all(axis=1))
+        seen = np.flatnonzero(finite_points(uv))
         if not seen.size or np.abs(uv[seen]).max() > NORMALISED_BOUND:
             return
         row = int(seen[np.argmax(np.abs(uv[seen]).max(axis=1))])

@@ -13,15 +13,18 @@ from pathlib import Path
 import numpy as np
 import pyarrow as pa
 
-from handdb.clip import ClipSpec
+from handdb.clip import ClipSpec, finite_points
 from handdb.hand.skeletons import Skeleton
 from handdb.ingest.delimited import write_csv
-from handdb.ingest.long_csv import joint_rows, read_long_csv
+from handdb.ingest.long_csv import FRAME_TYPE, joint_rows, read_long_csv
 from handdb.ingest.observations import Observations, single_file_rows
 from handdb.ingest.registry import InputFormat
 
 COLUMNS = ("frame", "joint", "u", "v")
 OPTIONAL_COLUMNS = ("confidence",)
+
+#: The columns parsed while reading (:func:`~handdb.ingest.delimited.read_delimited`).
+TYPES = FRAME_TYPE | dict.fromkeys(("u", "v", "confidence"), pa.float64())
 
 
 def read(path: str | Path, spec: ClipSpec, skeleton: Skeleton) -> Observations:
@@ -39,8 +42,8 @@ def read(path: str | Path, spec: ClipSpec, skeleton: Skeleton) -> Observations:
         Naming the line and column of the first bad cell.
     """
     path = Path(path)
-    table, joint, names = joint_rows(read_long_csv(path, COLUMNS, OPTIONAL_COLUMNS), "joint",
-                                     spec, skeleton)
+    table, joint, names = joint_rows(read_long_csv(path, COLUMNS, OPTIONAL_COLUMNS, TYPES),
+                                     "joint", spec, skeleton)
     frame = table.frames("frame")
     confidence = (table.numbers("confidence", allow_empty=True)
                   if "confidence" in table.columns else np.full(table.n_rows, np.nan))
@@ -62,7 +65,7 @@ def read(path: str | Path, spec: ClipSpec, skeleton: Skeleton) -> Observations:
 
 def reported(uv: np.ndarray, confidence: np.ndarray | None) -> np.ndarray:
     """``(T, J) bool``: points a file should carry (a position or a confidence)."""
-    present = np.isfinite(uv).all(axis=-1)
+    present = finite_points(uv)
     return present if confidence is None else present | np.isfinite(confidence)
 
 

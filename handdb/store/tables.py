@@ -208,7 +208,7 @@ def _column(value: Any, n: int) -> pa.Array:
     if isinstance(value, pa.ChunkedArray):
         return value.combine_chunks()
     if isinstance(value, str) or not hasattr(value, "__len__"):
-        return pa.array([value]).take(np.zeros(n, dtype=np.intp))
+        return pa.repeat(value, n)
     return pa.array(value, from_pandas=True)
 
 
