@@ -2,8 +2,10 @@
 message that says what to do (issue 15). Files are copied into a temporary inbox."""
 
 import json
+import re
 import shutil
 import struct
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -80,6 +82,53 @@ def test_openpose_hand_json(real_tools, tmp_path, hand, observed, wrist):
     clip = read(tmp_path)
     assert (clip.n_frames, points(clip).sum(), clip.observed.sum()) == (9, 189, observed)
     np.testing.assert_allclose(clip.uv[0, 0], wrist, atol=0.1)
+
+
+#: An image size that holds the real OpenPose sample's keypoints, pixels.
+OPENPOSE_IMAGE = (1280, 720)
+
+
+def rescaled_openpose(real_tools, folder, to_unit):
+    """The real OpenPose sample with every 2D keypoint's x, y mapped by ``to_unit(xy)``,
+    as OpenPose's ``--keypoint_scale`` writes them (points 0, 0, 0 stay missing)."""
+    folder.mkdir(parents=True)
+    size = np.asarray(OPENPOSE_IMAGE, dtype=np.float64)
+    for path in sorted((real_tools / SOURCES["openpose"][0]).iterdir()):
+        doc = json.loads(path.read_text())
+        for person in doc["people"]:
+            for key, values in person.items():
+                if key.endswith("_keypoints_2d") and values:
+                    points = np.asarray(values, dtype=np.float64).reshape(-1, 3)
+                    seen = points.any(axis=1)
+                    points[seen, :2] = to_unit(points[seen, :2] / size)
+                    person[key] = points.ravel().tolist()
+        (folder / path.name).write_text(json.dumps(doc))
+
+
+@pytest.mark.parametrize(("coordinates", "to_unit"), [("normalized", lambda xy: xy),
+                                                      ("normalized_signed",
+                                                       lambda xy: 2.0 * xy - 1.0)])
+def test_openpose_keypoint_scale_is_refused_as_pixels_and_read_when_said(
+        real_tools, tmp_path, coordinates, to_unit):
+    """``--keypoint_scale 3`` ([0, 1]) and ``4`` ([-1, 1]) output of the real sample:
+    refused where the sidecar says nothing (the keypoint file and field named, the
+    sidecar keys to add), read as the original once it says so."""
+    sidecar = SIDECAR_2D | {"hand": "left", "person": 0}
+    put(real_tools, tmp_path / "pixels", "openpose", sidecar)
+    (tmp_path / "scaled").mkdir()
+    rescaled_openpose(real_tools, tmp_path / "scaled" / "clip.openpose", to_unit)
+    (tmp_path / "scaled" / "clip.clip.json").write_text(json.dumps(sidecar))
+    error = refusal(tmp_path / "scaled")
+    assert re.fullmatch(r"video_0000000000\d\d_keypoints\.json", Path(error.file).name)
+    assert re.fullmatch(r"people\[0\]\.hand_left_keypoints_2d\[\w+\]\.[xy]", error.field)
+    for phrase in ("normalised to the image", "--keypoint_scale 3 or 4",
+                   '"coordinates": "normalized"', '"normalized_signed"'):
+        assert phrase in error.reason
+    width, height = OPENPOSE_IMAGE
+    (tmp_path / "scaled" / "clip.clip.json").write_text(json.dumps(sidecar | {
+        "coordinates": coordinates, "image": {"width": width, "height": height}}))
+    np.testing.assert_allclose(read(tmp_path / "scaled").uv, read(tmp_path / "pixels").uv,
+                               atol=1e-9)
 
 
 @pytest.mark.parametrize("individual", ["leftHand", "rightHand"])
