@@ -235,7 +235,7 @@ CASES = {
         None, "frames[0].landmarks", "visibility 3.2 is not in \\[0, 1\\] \\(a logit\\?\\)"),
     "mp_pixels_as_normalised": Case(lambda d: mediapipe(d, {"frames": [
         {"frame": 0, "landmarks": [[300.0, 200.0, 0.0]] * 21}]}), "c1.mediapipe.json", None,
-        "frames[0].landmarks", 'landmark 0 at x=300.*"coordinates": "pixels"'),
+        "frames[0].landmarks[0]", 'landmark 0 at x=300.*"coordinates": "pixels"'),
     "mp_hands_without_frames": Case(lambda d: mediapipe(d, [[{"x": 0.1, "y": 0.2}] * 21]),
                                     "c1.mediapipe.json", None, "frames",
                                     "list of hands without frame numbers"),

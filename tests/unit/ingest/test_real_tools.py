@@ -187,6 +187,28 @@ def test_mediapipe_long_csv_as_tasks_json_reads_the_same(real_tools, tmp_path):
     np.testing.assert_array_equal(from_json.confidence, 0.8)
 
 
+@pytest.mark.parametrize(("pixels_per_unit", "width", "axis"), [
+    ((1280, 720), 1280, "x"), ((1280, 720), 1, "x"), ((1, 720), 1280, "y")])
+def test_mediapipe_json_in_pixels_said_normalised_is_refused_on_either_axis(
+        real_tools, tmp_path, pixels_per_unit, width, axis):
+    """The real landmarks of hand 0 saved in pixels (on both axes, or on y only), the
+    document saying nothing (so normalised, MediaPipe's own). An image one pixel wide
+    scales x by 1: the check follows the coordinate system, not the scale, and names the
+    landmark and the axis beyond the image."""
+    rows = np.loadtxt(real_tools / SOURCES["mediapipe"][0], delimiter=",", skiprows=1)
+    hand = rows[rows[:, 1] == 0]
+    frames = [{"frame": int(frame), "landmarks": (hand[hand[:, 0] == frame][:, 3:6]
+                                                 * [*pixels_per_unit, 1]).tolist()}
+              for frame in np.unique(hand[:, 0])]
+    (tmp_path / "clip.mediapipe.json").write_text(json.dumps({"frames": frames}))
+    (tmp_path / "clip.clip.json").write_text(json.dumps(SIDECAR_2D | {
+        "image": {"width": width, "height": 720}}))
+    error = refusal(tmp_path)
+    assert Path(error.file).name == "clip.mediapipe.json"
+    assert re.fullmatch(r"frames\[0\]\.landmarks\[\d+\]", error.field), error.field
+    assert f"at {axis}=" in error.reason and '"coordinates": "pixels"' in error.reason
+
+
 @pytest.mark.parametrize("joint_map", [GLOVE_TIPS | dict.fromkeys(
     set(GLOVE_MARKERS) - set(GLOVE_TIPS)), GLOVE_TIPS | {"*": None}])
 def test_qualisys_glove_tsv(real_tools, tmp_path, joint_map):
