@@ -31,7 +31,7 @@ from handdb.errors import (
 )
 from handdb.gapfill import DEFAULT_METHOD as DEFAULT_GAP_FILL
 from handdb.gapfill import FillResult, fill_gaps
-from handdb.gapfill.caveats import empty_frames, fill_caveats, never_detected
+from handdb.gapfill.caveats import caveat_rows, fill_caveats
 from handdb.ingest import ClipEntry, load_clip
 from handdb.lengths.bone_lengths import BoneLengths, clip_bone_lengths
 from handdb.lifting import DEFAULT_METHOD as DEFAULT_LIFT
@@ -207,8 +207,8 @@ def validate(result: ClipResult, options: BuildOptions) -> ClipResult:
 
     The plausibility gate (:func:`handdb.validation.plausibility.assess`) runs on every
     clip; what gap filling could not know (:func:`handdb.gapfill.caveats.fill_caveats`)
-    joins its reasons, and the frames left without positions and the joints never
-    detected its rows. The lifting
+    joins its reasons, and the rows it is about
+    (:func:`handdb.gapfill.caveats.caveat_rows`) its rows. The lifting
     methods are compared on clips with ground truth.
     """
     clip = result.clip
@@ -220,8 +220,7 @@ def validate(result: ClipResult, options: BuildOptions) -> ClipResult:
                      sampling=clip.sampling)
     if result.fill is not None:
         verdict = Verdict(reasons=(*fill_caveats(result.fill, clip.skeleton), *verdict.reasons),
-                          rows=(verdict.rows | empty_frames(result.fill)[:, None]
-                                | never_detected(result.fill)[None, :]))
+                          rows=verdict.rows | caveat_rows(result.fill))
     result = replace(result, verdict=verdict)
     if clip.truth is None:
         return result

@@ -66,6 +66,7 @@ from handdb.gapfill.rigid import (
     palm_joints,
     place_from_rest_pose,
     place_on_chords,
+    placeable_frames,
 )
 from handdb.hand.skeletons import Skeleton
 
@@ -419,7 +420,7 @@ def check_placeable(missing: np.ndarray, skeleton: Skeleton, never_seen: np.ndar
 
     A joint never observed is placed from the rest pose fitted to the wrist and finger
     bases a frame observes (:func:`~handdb.gapfill.rigid.place_from_rest_pose`); a clip
-    none of whose frames observes :data:`~handdb.gapfill.rigid.MIN_PALM_POINTS` of them
+    none of whose frames is placeable (:func:`~handdb.gapfill.rigid.placeable_frames`)
     gives no hand to place it on.
 
     Parameters
@@ -437,10 +438,10 @@ def check_placeable(missing: np.ndarray, skeleton: Skeleton, never_seen: np.ndar
         If ``never_seen`` is not empty and no frame observes enough palm points; the
         message names the joints never observed and the palm points the clip does observe.
     """
-    palm = palm_joints(skeleton)
-    if not never_seen.size or (~missing & palm).sum(axis=1).max() >= MIN_PALM_POINTS:
+    if not never_seen.size or placeable_frames(missing, skeleton).any():
         return
-    seen = [skeleton.joints[j] for j in np.flatnonzero(palm & ~missing.all(axis=0))]
+    seen = [skeleton.joints[j]
+            for j in np.flatnonzero(palm_joints(skeleton) & ~missing.all(axis=0))]
     names = ", ".join(skeleton.joints[j] for j in never_seen)
     raise GapFillError(
         f"gap filling by 'auto' cannot place {names}: never observed in the clip, they are "

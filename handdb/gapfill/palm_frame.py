@@ -22,7 +22,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from handdb.gapfill.rest_pose import rest_pose_2d
-from handdb.gapfill.rigid import MIN_PALM_POINTS, palm_joints
+from handdb.gapfill.rigid import palm_joints, placeable_frames
 from handdb.gapfill.transfer import (
     AFFINE,
     NO_MAP,
@@ -93,10 +93,10 @@ def palm_motion(uv: np.ndarray, missing: np.ndarray, skeleton: Skeleton) -> Palm
         ``None`` when no frame shows :data:`~handdb.gapfill.rigid.MIN_PALM_POINTS` palm
         points spread enough for an affine fit.
     """
+    if not placeable_frames(missing, skeleton).any():
+        return None
     palm = palm_joints(skeleton)
     palm_seen = ~missing & palm
-    if not (palm_seen.sum(axis=1) >= MIN_PALM_POINTS).any():
-        return None
     palm_index = np.flatnonzero(palm)
     points, seen = np.take(uv, palm_index, axis=1), np.take(palm_seen, palm_index, axis=1)
     complete = np.asarray(seen.all(axis=1), dtype=bool)

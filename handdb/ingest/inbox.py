@@ -41,6 +41,7 @@ from handdb.ingest.registry import (
     DATA_KINDS,
     MARKERS_KIND,
     SIDECAR_SUFFIX,
+    InputFormat,
     get_format,
     match_format,
     registered_formats,
@@ -340,17 +341,18 @@ def _dense(rows: Observations | Positions, values: np.ndarray, n_frames: int) ->
 
 
 def _check_plausible(spec: ClipSpec, observations: Observations | Positions,
-                     truth: Positions | None, three_d: bool) -> None:
+                     truth: Positions | None, track_format: InputFormat) -> None:
     """Refuse coordinates no hand can have.
 
     Coordinates beyond the limits of :mod:`handdb.ingest.limits`, and a 2D track whose
     every point lies within a pixel of the origin (normalised, not pixels).
     """
+    three_d = track_format.kind == MARKERS_KIND
     metres = MAX_COORDINATE_METRES / spec.meters_per_unit
     observations.check_magnitude(metres if three_d else MAX_PIXEL_COORDINATE,
                                  spec.units if three_d else "px")
     if isinstance(observations, Observations):
-        observations.check_pixels()
+        observations.check_pixels("coordinates" in track_format.sidecar_keys)
     if truth is not None:
         truth.check_magnitude(metres, spec.units)
 
@@ -385,7 +387,7 @@ def load_clip(entry: ClipEntry, content_hash: str | None = None) -> Clip:
             truth_rows = track_format.read_truth(entry.tracks, spec, skeleton)
         else:
             truth_rows = None
-        _check_plausible(spec, observations, truth_rows, three_d)
+        _check_plausible(spec, observations, truth_rows, track_format)
         named = {str(entry.tracks): observations.names}
         if truth_rows is not None and entry.truth is not None:
             named[str(entry.truth)] = truth_rows.names

@@ -323,15 +323,37 @@ def image_scale(system: str, spec: ClipSpec) -> np.ndarray:
     return np.array([spec.image_width, spec.image_height], dtype=np.float64)
 
 
-def check_normalised(xy: np.ndarray, path: Path, field: str) -> None:
-    """Refuse normalised landmarks ``xy`` ``(21, 2)`` beyond :data:`NORMALISED_RANGE`."""
+def outside_image(xy: np.ndarray) -> tuple[int, int] | None:
+    """The first ``(point, axis)`` of normalised ``xy`` ``(N, 2)`` beyond the image.
+
+    Either axis counts (:data:`NORMALISED_RANGE`); ``None`` when every value lies within.
+    """
     low, high = NORMALISED_RANGE
     outside = np.argwhere((xy < low) | (xy > high))
-    if outside.size:
-        k, axis = outside[0]
-        raise InputError(path, f"landmark {k} at {'xy'[axis]}={xy[k, axis]:g} lies far outside "
-                         f"the image (normalised coordinates lie within [{low}, {high}]); are "
-                         'these pixels? Set "coordinates": "pixels"', field=field)
+    return (int(outside[0, 0]), int(outside[0, 1])) if outside.size else None
+
+
+def outside_image_reason(value: float, axis: int) -> str:
+    """Why a normalised coordinate ``value`` on ``axis`` (0: x, 1: y) is refused."""
+    low, high = NORMALISED_RANGE
+    return (f"{'xy'[axis]}={value:g} lies far outside the image (normalised coordinates lie "
+            f"within [{low}, {high}]); are these pixels? Set \"coordinates\": \"pixels\" in the "
+            "sidecar")
+
+
+def check_normalised(xy: np.ndarray, path: Path, field: str) -> None:
+    """Refuse normalised landmarks ``xy`` ``(21, 2)`` beyond the image on either axis.
+
+    Raises
+    ------
+    InputError
+        Naming ``path`` and the landmark (``frames[3].landmarks[5]``).
+    """
+    found = outside_image(xy)
+    if found is not None:
+        k, axis = found
+        raise InputError(path, f"landmark {k} at {outside_image_reason(xy[k, axis], axis)}",
+                         field=f"{field}[{k}]")
 
 
 def check_not_world(xy: np.ndarray, path: Path, where: str) -> None:
@@ -375,7 +397,8 @@ def read(path: str | Path, spec: ClipSpec, skeleton: Skeleton) -> Observations:
     """
     path = Path(path)
     doc, hands, n_frames = read_hands(path, spec)
-    scale = image_scale(coordinate_system(doc, path, spec), spec)
+    normalised = coordinate_system(doc, path, spec) == "normalized"
+    scale = image_scale("normalized" if normalised else "pixels", spec)
     hand = load_skeleton(HAND_SKELETON)
     joints = resolve_names(hand.joints, spec, skeleton, path,
                            lambda k: (None, "landmarks"), fixed=True)
@@ -384,14 +407,14 @@ def read(path: str | Path, spec: ClipSpec, skeleton: Skeleton) -> Observations:
     for frame, found in sorted(hands.items()):
         if found.landmarks is None:
             continue
-        if scale[0] != 1.0:
+        if normalised:
             check_normalised(found.landmarks[:, :2], path, found.field)
         confidence = confidence_of(found.visibility, found.score, path, found.field,
                                    hand.n_joints)
         frames.append(frame)
         points.append(np.column_stack([found.landmarks[:, :2] * scale, confidence]))
     points_array = np.array(points).reshape(-1, hand.n_joints, 3)[:, kept]
-    if scale[0] != 1.0:
+    if normalised:
         check_not_world(points_array[..., :2] / scale, path, "landmarks")
     source, files = single_file_rows(path, points_array.shape[0] * kept.size)
     return Observations(

@@ -34,10 +34,11 @@ from handdb.ingest.limits import quoted
 from handdb.ingest.long_csv import read_long_csv
 from handdb.ingest.mediapipe import (
     HAND_SKELETON,
-    NORMALISED_RANGE,
     check_not_world,
     coordinate_system,
     image_scale,
+    outside_image,
+    outside_image_reason,
 )
 from handdb.ingest.observations import Observations, resolve_names, single_file_rows
 from handdb.ingest.registry import InputFormat
@@ -143,13 +144,10 @@ def read(path: str | Path, spec: ClipSpec, skeleton: Skeleton) -> Observations:
     scale = image_scale(system, spec)
     xy = np.column_stack([table.numbers(axis, allow_empty=True) for axis in "xy"])
     if system == "normalized":
-        low, high = NORMALISED_RANGE
-        outside = np.argwhere((xy < low) | (xy > high))
-        if outside.size:
-            row, axis = outside[0]
-            raise table.error(int(row), "xy"[axis], f"{xy[row, axis]:g} lies far outside the "
-                              f"image (normalised coordinates lie within [{low}, {high}]); "
-                              'are these pixels? Set "coordinates": "pixels" in the sidecar')
+        found = outside_image(xy)
+        if found is not None:
+            row, axis = found
+            raise table.error(row, "xy"[axis], outside_image_reason(xy[row, axis], axis))
         by_frame = np.full((int(frame.max()) + 1, skeleton.n_joints, 2), np.nan)
         by_frame[frame, joint] = xy
         check_not_world(by_frame[np.isfinite(by_frame).any(axis=(1, 2))], path, "x")

@@ -360,11 +360,18 @@ class Observations(_Rows):
     def _coordinates(self) -> dict[str, np.ndarray]:
         return {"u": self.u, "v": self.v}
 
-    def check_pixels(self) -> None:
+    def check_pixels(self, reads_coordinates: bool) -> None:
         """Refuse a track normalised to the image instead of in pixels.
 
         Such a track's every point lies within :data:`NORMALISED_BOUND` pixels of the
-        origin: a hand is more than two pixels across.
+        origin: a hand is more than two pixels across. This is the one check of it, for
+        every 2D format.
+
+        Parameters
+        ----------
+        reads_coordinates
+            Whether the format reads the sidecar's ``coordinates`` (OpenPose, MediaPipe),
+            which is then the remedy the message gives.
 
         Raises
         ------
@@ -376,11 +383,16 @@ class Observations(_Rows):
         if not seen.size or np.abs(uv[seen]).max() > NORMALISED_BOUND:
             return
         row = int(seen[np.argmax(np.abs(uv[seen]).max(axis=1))])
+        remedy = ('the tool wrote normalised coordinates (OpenPose run with --keypoint_scale '
+                  '3 or 4): add "coordinates": "normalized" (or, for OpenPose\'s [-1, 1], '
+                  '"normalized_signed") and "image": {"width": W, "height": H} to the sidecar'
+                  if reads_coordinates else
+                  "multiply them by the image's width and height (MediaPipe's landmarks: "
+                  "keep them in .mediapipe.csv or .mediapipe.json, which scale them by the "
+                  'sidecar\'s "image")')
         raise self.error(row, "u", f"every point lies within {NORMALISED_BOUND:g} px of the "
                          "origin, so the coordinates are normalised to the image, not "
-                         "pixels: multiply them by the image's width and height (MediaPipe's "
-                         "landmarks: keep them in .mediapipe.csv or .mediapipe.json, which "
-                         'scale them by the sidecar\'s "image")')
+                         f"pixels: {remedy}")
 
 
 @dataclass(frozen=True, kw_only=True)

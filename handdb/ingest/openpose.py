@@ -18,7 +18,8 @@ point missing). Without ``person`` no file may hold more than one person.
 Coordinates are pixels unless the sidecar's ``coordinates`` says ``"normalized"``
 ([0, 1], ``--keypoint_scale 3``) or ``"normalized_signed"`` ([-1, 1],
 ``--keypoint_scale 4``), which need the sidecar's ``image``. A clip whose every keypoint
-lies within [-1, 1] while said to be pixels is refused.
+lies within [-1, 1] while said to be pixels is refused
+(:meth:`~handdb.ingest.observations.Observations.check_pixels`).
 """
 
 from __future__ import annotations
@@ -37,7 +38,6 @@ from handdb.hand.skeletons import Skeleton, correspondence, load_skeleton
 from handdb.ingest.jsondoc import load_json, number_array, preview
 from handdb.ingest.limits import (
     MAX_FRAMES,
-    NORMALISED_BOUND,
     folder_files,
     frame_limit_reason,
 )
@@ -254,17 +254,10 @@ def hand_keypoints(path: Path, person: dict[str, Any], index: int, hand: str
         n_points, VALUES_PER_POINT)
 
 
-def _to_pixels(xy: np.ndarray, missing: np.ndarray, spec: ClipSpec,
-               folder: Path) -> np.ndarray:
+def _to_pixels(xy: np.ndarray, missing: np.ndarray, spec: ClipSpec) -> np.ndarray:
     """Keypoints ``(F, 21, 2)`` as pixels by the sidecar's ``coordinates``; NaN if missing."""
     system = spec.coordinates or "pixels"
     if system == "pixels":
-        present = xy[~missing]
-        if present.size and (np.abs(present) <= NORMALISED_BOUND).all():
-            raise InputError(folder, "every keypoint lies within [-1, 1]: OpenPose was run "
-                             "with --keypoint_scale 3 or 4; add \"coordinates\": \"normalized\" "
-                             '(or "normalized_signed" for [-1, 1]) and "image": {"width": W, '
-                             f'"height": H}} to {Path(spec.path).name}')
         pixels = xy
     else:
         if spec.image_width is None or spec.image_height is None:
@@ -304,7 +297,7 @@ def read(path: str | Path, spec: ClipSpec, skeleton: Skeleton) -> Observations:
     points = np.array([p for *_, p in with_hand]).reshape(
         -1, hand.n_joints, VALUES_PER_POINT)[:, kept]
     missing = (points == 0).all(axis=-1)
-    uv = _to_pixels(points[..., :2], missing, spec, folder)
+    uv = _to_pixels(points[..., :2], missing, spec)
     n_files = np.array([i for i, *_ in with_hand], dtype=np.int64)
     frames = np.array([frame for _, frame, *_ in with_hand], dtype=np.int64)
     key = HAND_KEYS[spec.hand]
@@ -322,8 +315,8 @@ def read(path: str | Path, spec: ClipSpec, skeleton: Skeleton) -> Observations:
         skeleton=skeleton,
         n_frames=numbered[-1][0] + 1,
         names=frozenset(hand.joints),
-        fields={name: f"{person}.{key}[{{joint}}].{name[0]}" for name in ("u", "v")}
-        | {"confidence": f"{person}.{key}[{{joint}}].c"},
+        fields={name: f"{person}.{key}[{{joint}}].{value}"
+                for name, value in (("u", "x"), ("v", "y"), ("confidence", "c"))},
     )
 
 

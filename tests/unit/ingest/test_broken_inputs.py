@@ -212,8 +212,11 @@ CASES = {
     "op_people_vary": Case(lambda d: openpose_folder(d, people=(2, 2, 1), person=1),
                            "v_000000000002_keypoints.json", None, "people",
                            "1 person here but 2 in v_000000000000_keypoints.json"),
-    "op_normalised": Case(lambda d: openpose_folder(d, scale=1 / 1000), "c1.openpose", None,
-                          None, 'every keypoint lies within \\[-1, 1\\].*"coordinates"'),
+    "op_normalised": Case(lambda d: openpose_folder(d, scale=1 / 1000),
+                          "v_000000000000_keypoints.json", None,
+                          "people[0].hand_right_keypoints_2d[little_tip].x",
+                          'normalised to the image.*--keypoint_scale 3 or 4.*'
+                          '"coordinates": "normalized"'),
     "op_normalised_without_image": Case(
         lambda d: openpose_folder(d, scale=1 / 1000, coordinates="normalized"),
         "c1.clip.json", None, "image", "needs the image size"),
@@ -232,7 +235,7 @@ CASES = {
         None, "frames[0].landmarks", "visibility 3.2 is not in \\[0, 1\\] \\(a logit\\?\\)"),
     "mp_pixels_as_normalised": Case(lambda d: mediapipe(d, {"frames": [
         {"frame": 0, "landmarks": [[300.0, 200.0, 0.0]] * 21}]}), "c1.mediapipe.json", None,
-        "frames[0].landmarks", 'landmark 0 at x=300.*"coordinates": "pixels"'),
+        "frames[0].landmarks[0]", 'landmark 0 at x=300.*"coordinates": "pixels"'),
     "mp_hands_without_frames": Case(lambda d: mediapipe(d, [[{"x": 0.1, "y": 0.2}] * 21]),
                                     "c1.mediapipe.json", None, "frames",
                                     "list of hands without frame numbers"),

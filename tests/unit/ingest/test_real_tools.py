@@ -2,8 +2,10 @@
 message that says what to do (issue 15). Files are copied into a temporary inbox."""
 
 import json
+import re
 import shutil
 import struct
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -82,6 +84,53 @@ def test_openpose_hand_json(real_tools, tmp_path, hand, observed, wrist):
     np.testing.assert_allclose(clip.uv[0, 0], wrist, atol=0.1)
 
 
+#: An image size that holds the real OpenPose sample's keypoints, pixels.
+OPENPOSE_IMAGE = (1280, 720)
+
+
+def rescaled_openpose(real_tools, folder, to_unit):
+    """The real OpenPose sample with every 2D keypoint's x, y mapped by ``to_unit(xy)``,
+    as OpenPose's ``--keypoint_scale`` writes them (points 0, 0, 0 stay missing)."""
+    folder.mkdir(parents=True)
+    size = np.asarray(OPENPOSE_IMAGE, dtype=np.float64)
+    for path in sorted((real_tools / SOURCES["openpose"][0]).iterdir()):
+        doc = json.loads(path.read_text())
+        for person in doc["people"]:
+            for key, values in person.items():
+                if key.endswith("_keypoints_2d") and values:
+                    points = np.asarray(values, dtype=np.float64).reshape(-1, 3)
+                    seen = points.any(axis=1)
+                    points[seen, :2] = to_unit(points[seen, :2] / size)
+                    person[key] = points.ravel().tolist()
+        (folder / path.name).write_text(json.dumps(doc))
+
+
+@pytest.mark.parametrize(("coordinates", "to_unit"), [("normalized", lambda xy: xy),
+                                                      ("normalized_signed",
+                                                       lambda xy: 2.0 * xy - 1.0)])
+def test_openpose_keypoint_scale_is_refused_as_pixels_and_read_when_said(
+        real_tools, tmp_path, coordinates, to_unit):
+    """``--keypoint_scale 3`` ([0, 1]) and ``4`` ([-1, 1]) output of the real sample:
+    refused where the sidecar says nothing (the keypoint file and field named, the
+    sidecar keys to add), read as the original once it says so."""
+    sidecar = SIDECAR_2D | {"hand": "left", "person": 0}
+    put(real_tools, tmp_path / "pixels", "openpose", sidecar)
+    (tmp_path / "scaled").mkdir()
+    rescaled_openpose(real_tools, tmp_path / "scaled" / "clip.openpose", to_unit)
+    (tmp_path / "scaled" / "clip.clip.json").write_text(json.dumps(sidecar))
+    error = refusal(tmp_path / "scaled")
+    assert re.fullmatch(r"video_0000000000\d\d_keypoints\.json", Path(error.file).name)
+    assert re.fullmatch(r"people\[0\]\.hand_left_keypoints_2d\[\w+\]\.[xy]", error.field)
+    for phrase in ("normalised to the image", "--keypoint_scale 3 or 4",
+                   '"coordinates": "normalized"', '"normalized_signed"'):
+        assert phrase in error.reason
+    width, height = OPENPOSE_IMAGE
+    (tmp_path / "scaled" / "clip.clip.json").write_text(json.dumps(sidecar | {
+        "coordinates": coordinates, "image": {"width": width, "height": height}}))
+    np.testing.assert_allclose(read(tmp_path / "scaled").uv, read(tmp_path / "pixels").uv,
+                               atol=1e-9)
+
+
 @pytest.mark.parametrize("individual", ["leftHand", "rightHand"])
 def test_dlc_multi_animal_labelled_data_by_row(real_tools, tmp_path, individual):
     put(real_tools, tmp_path, "dlc", SIDECAR_2D | {
@@ -136,6 +185,28 @@ def test_mediapipe_long_csv_as_tasks_json_reads_the_same(real_tools, tmp_path):
     from_json, from_csv = read(tmp_path / "json"), read(tmp_path / "csv")
     np.testing.assert_allclose(from_json.uv, from_csv.uv)
     np.testing.assert_array_equal(from_json.confidence, 0.8)
+
+
+@pytest.mark.parametrize(("pixels_per_unit", "width", "axis"), [
+    ((1280, 720), 1280, "x"), ((1280, 720), 1, "x"), ((1, 720), 1280, "y")])
+def test_mediapipe_json_in_pixels_said_normalised_is_refused_on_either_axis(
+        real_tools, tmp_path, pixels_per_unit, width, axis):
+    """The real landmarks of hand 0 saved in pixels (on both axes, or on y only), the
+    document saying nothing (so normalised, MediaPipe's own). An image one pixel wide
+    scales x by 1: the check follows the coordinate system, not the scale, and names the
+    landmark and the axis beyond the image."""
+    rows = np.loadtxt(real_tools / SOURCES["mediapipe"][0], delimiter=",", skiprows=1)
+    hand = rows[rows[:, 1] == 0]
+    frames = [{"frame": int(frame), "landmarks": (hand[hand[:, 0] == frame][:, 3:6]
+                                                 * [*pixels_per_unit, 1]).tolist()}
+              for frame in np.unique(hand[:, 0])]
+    (tmp_path / "clip.mediapipe.json").write_text(json.dumps({"frames": frames}))
+    (tmp_path / "clip.clip.json").write_text(json.dumps(SIDECAR_2D | {
+        "image": {"width": width, "height": 720}}))
+    error = refusal(tmp_path)
+    assert Path(error.file).name == "clip.mediapipe.json"
+    assert re.fullmatch(r"frames\[0\]\.landmarks\[\d+\]", error.field), error.field
+    assert f"at {axis}=" in error.reason and '"coordinates": "pixels"' in error.reason
 
 
 @pytest.mark.parametrize("joint_map", [GLOVE_TIPS | dict.fromkeys(
