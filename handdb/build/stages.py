@@ -251,11 +251,30 @@ def _put(store: Store, local: Path, *parts: str) -> str:
     return "/".join(parts)
 
 
+def _flag_unplaced(result: ClipResult, unplaced: np.ndarray) -> ClipResult:
+    """``result`` with its joints that have no 3D position, ``(T, J) bool``, flagged and said."""
+    frames = np.flatnonzero(unplaced.any(axis=1))
+    missing = (f"{unplaced.sum()} joint positions in {len(frames)} frames (from frame "
+               f"{frames[0]}) could not be placed")
+    placed = np.flatnonzero(~unplaced.any(axis=1))
+    if len(placed):
+        reason = (f"USD animates frames {placed[0]}-{placed[-1]}: {missing}, and USD holds "
+                  "the nearest keyed pose there (interpolates it inside that span)")
+    else:
+        reason = (f"no USD or preview written: {missing}; fill them ('gap_fill') or cut "
+                  "those frames from the track")
+    verdict = result.verdict or Verdict(reasons=(), rows=np.zeros_like(unplaced))
+    return replace(result, verdict=Verdict(reasons=(*verdict.reasons, reason),
+                                           rows=verdict.rows | unplaced))
+
+
 def export(result: ClipResult, store: Store, options: BuildOptions) -> ClipResult:
     """Write the clip's USD animation, preview thumbnail and validation chart into the database.
 
-    A clip with joints that could not be lifted is not exported (``usd_path`` stays null)
-    and says so: the reason joins its flag reasons, the frames and joints its flagged rows.
+    A clip with joints that could not be lifted (a detector's empty first or last frames)
+    says so: the reason joins its flag reasons, the frames and joints its flagged rows. Its
+    USD animates the frames that place every joint (:mod:`handdb.export.usd`); only a clip
+    with no such frame is not exported (``usd_path`` stays null).
     """
     clip = result.clip
     lifted = _needs(result.lifted, "lift", result)
@@ -264,13 +283,9 @@ def export(result: ClipResult, store: Store, options: BuildOptions) -> ClipResul
         return result
     unplaced = ~np.isfinite(lifted.xyz).all(axis=-1)                       # (T, J)
     if unplaced.any():
-        frames = np.flatnonzero(unplaced.any(axis=1))
-        reason = (f"no USD or preview written: {unplaced.sum()} joint positions in "
-                  f"{len(frames)} frames (from frame {frames[0]}) could not be placed; "
-                  "fill them ('gap_fill') or cut those frames from the track")
-        verdict = result.verdict or Verdict(reasons=(), rows=np.zeros_like(unplaced))
-        return replace(result, verdict=Verdict(reasons=(*verdict.reasons, reason),
-                                               rows=verdict.rows | unplaced))
+        result = _flag_unplaced(result, unplaced)
+        if unplaced.any(axis=1).all():
+            return result
     # USD takes a second to import: a build with nothing to export skips it
     from handdb.export.thumbnail import write_thumbnail_png
     from handdb.export.usd import export_clip_usd

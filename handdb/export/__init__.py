@@ -14,15 +14,17 @@ from handdb.export.formats import FORMATS, ExportFormat, register_format
 
 #: Version of the USD, preview and chart files. Raise it when a change alters the output; it
 #: enters the build keys (:mod:`handdb.build.keys`), a docstring edit or a speed-up does not.
-VERSION = 2
+VERSION = 3
 
 for _entry in (
     ExportFormat("usd", (".usd", ".usdc", ".usda"), "handdb.export.stored:write_usd",
                  "UsdSkel animation with a skinned hand mesh (binary crate, or text .usda)",
-                 "Blender 4+, Maya (maya-usd), Houdini, usdview, Omniverse", posed=True),
+                 "Blender 4+, Maya (maya-usd), Houdini, usdview, Omniverse", posed=True,
+                 keys_placed_frames=True),
     ExportFormat("usdz", (".usdz",), "handdb.export.stored:write_usd",
                  "the USD animation packaged as one zip archive",
-                 "Apple Quick Look and Reality Composer, Blender 4+, usdview", posed=True),
+                 "Apple Quick Look and Reality Composer, Blender 4+, usdview", posed=True,
+                 keys_placed_frames=True),
     ExportFormat("bvh", (".bvh",), "handdb.export.stored:write_bvh",
                  "Biovision Hierarchy: rigid bones, Euler rotation channels",
                  "Blender, MotionBuilder, Maya, Unity and Unreal importers", posed=True),

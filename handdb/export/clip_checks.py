@@ -65,3 +65,30 @@ def require_filled(xyz: np.ndarray, source: str) -> None:
     if missing:
         raise StageError(f"{source}: {missing} of {len(xyz)} frames have joints "
                          "without a 3D position; fill the gaps before exporting")
+
+
+def placed_frames(xyz: np.ndarray, source: str) -> np.ndarray:
+    """The frames of ``xyz`` that place every joint, as a posed animation can key them.
+
+    Parameters
+    ----------
+    xyz
+        ``(T, J, 3) float64`` joint positions, clip units; NaN where a joint has no position.
+    source
+        What the positions are, to open the message (``"clip 'rapid-s01'"``, a file path).
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(n,) int64`` frame numbers, increasing, ``n >= 1``.
+
+    Raises
+    ------
+    StageError
+        If no frame places every joint.
+    """
+    frames = np.flatnonzero(np.isfinite(xyz).all(axis=(1, 2)))
+    if len(frames) == 0:
+        raise StageError(f"{source}: none of its {len(xyz)} frames places every joint in 3D; "
+                         "fill the gaps before exporting")
+    return frames

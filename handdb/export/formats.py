@@ -74,6 +74,9 @@ class ExportFormat:
     batch_writer
         ``"module:function"`` of a writer of many clips at once (see the module doc), or
         ``None`` when clips are written one by one.
+    keys_placed_frames
+        ``True`` when a posed format keys only the frames that place every joint and holds
+        the pose over the others (USD), so a clip with such frames is still written.
     """
 
     name: str
@@ -83,6 +86,7 @@ class ExportFormat:
     opens_in: str
     posed: bool
     batch_writer: str | None = None
+    keys_placed_frames: bool = False
 
     @property
     def suffix(self) -> str:

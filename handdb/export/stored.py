@@ -341,8 +341,9 @@ def _exportable(db: str, entry: ExportFormat, clip_ids: list[str]
                 ) -> Iterator[StoredMotion | ClipExport]:
     """Each clip's stored motion, in turn, or why it is skipped.
 
-    A clip a posed format cannot take (frames with joints gap filling could not place) is
-    skipped, and so is a clip whose motion is not in the database.
+    A clip a posed format cannot take (frames with joints gap filling could not place,
+    unless the format keys only the placed frames) is skipped, and so is a clip whose
+    motion is not in the database.
     """
     for clip_id in clip_ids:
         try:
@@ -350,10 +351,11 @@ def _exportable(db: str, entry: ExportFormat, clip_ids: list[str]
         except StoreError as exc:
             yield ClipExport(clip_id, None, str(exc))
             continue
-        if entry.posed and motion.unplaced_frames:
+        if entry.posed and not entry.keys_placed_frames and motion.unplaced_frames:
             yield ClipExport(clip_id, None, (
                 f"{motion.unplaced_frames} of {len(motion.xyz)} frames have joints gap "
                 f"filling could not place, and {entry.name} needs every joint posed; "
-                "TRC and C3D write them as missing"))
+                "USD keys the frames that place every joint, TRC and C3D write them as "
+                "missing"))
             continue
         yield motion

@@ -6,8 +6,9 @@ Layout of the exported stage (``<Hand>`` is ``RightHand`` or ``LeftHand``)::
     /<Hand>/Skeleton   Skeleton: joints, bindTransforms, restTransforms;
                        SkelBindingAPI with skel:animationSource -> Animation
     /<Hand>/<clip>     SkelAnimation named after the clip (:func:`animation_name`):
-                       translations, rotations at every frame (a channel equal at
-                       every frame once, as its default), scales once
+                       translations, rotations at every frame that places every
+                       joint (a channel equal at every frame once, as its
+                       default), scales once
     /<Hand>/Mesh       Mesh of capsules and palm, SkelBindingAPI bound to the Skeleton
 
 Axes. handdb's 3D frame is the camera's: ``x`` right, ``y`` down, ``z`` away from the
@@ -19,6 +20,14 @@ joint only; every other joint's local transform is unchanged.
 
 Lengths stay in the clip's units and ``metersPerUnit`` says which. Frame ``i`` is at time
 code ``i``; ``timeCodesPerSecond`` and ``framesPerSecond`` are the clip's fps.
+
+Frames without every joint. A detector's first or last frames often see no point, and
+those stay without positions in the database. The animation has a time sample at each
+frame that places every joint and none elsewhere, and the stage's start and end time codes
+are the first and last such frame: Blender and Maya open it on the frames the clip shows,
+each at its own frame number. USD holds the first sample before it and the last after it,
+and interpolates between the samples either side of a frame inside the span that lacks a
+joint (rotations slerped), so every DCC sees the same pose at every time.
 
 Joint transforms come from :func:`handdb.export.rotations.joint_rotations` unless the caller
 passes its own (e.g. fitted) :class:`~handdb.export.rotations.JointMotion`. By default the
@@ -41,7 +50,7 @@ from scipy.spatial.transform import Rotation
 
 from handdb.clip import METERS_PER_UNIT
 from handdb.errors import ParameterError, StageError
-from handdb.export.clip_checks import check_skinned_clip, require_filled
+from handdb.export.clip_checks import check_skinned_clip, placed_frames
 from handdb.export.mesh import INFLUENCES, hand_mesh
 from handdb.export.rotations import (
     CAMERA_TO_Y_UP,
@@ -113,13 +122,14 @@ def _usd_matrices(orientations: np.ndarray, positions: np.ndarray) -> Vt.Matrix4
     return Vt.Matrix4dArray.FromNumpy(matrices)
 
 
-def _set_stage_metadata(stage: Usd.Stage, n_frames: int, fps: float, units: str) -> None:
+def _set_stage_metadata(stage: Usd.Stage, frames: np.ndarray, fps: float, units: str) -> None:
+    """Axes, units, rate and the time span ``frames[0]..frames[-1]`` of the stage."""
     UsdGeom.SetStageUpAxis(stage, UsdGeom.Tokens.y)
     UsdGeom.SetStageMetersPerUnit(stage, METERS_PER_UNIT[units])
     stage.SetTimeCodesPerSecond(fps)
     stage.SetFramesPerSecond(fps)
-    stage.SetStartTimeCode(0)
-    stage.SetEndTimeCode(n_frames - 1)
+    stage.SetStartTimeCode(float(frames[0]))
+    stage.SetEndTimeCode(float(frames[-1]))
 
 
 def _is_constant(values: np.ndarray) -> bool:
@@ -132,8 +142,10 @@ def _is_constant(values: np.ndarray) -> bool:
     return bool(np.abs(values - values[0]).max() <= tolerance)
 
 
-def _author_animation(anim: UsdSkel.Animation, motion: JointMotion) -> None:
-    """Author every channel of ``anim``: one time sample per frame, or once if constant.
+def _author_animation(anim: UsdSkel.Animation, motion: JointMotion, frames: np.ndarray) -> None:
+    """Author every channel of ``anim``: a time sample per frame, or once if constant.
+
+    ``frames`` ``(T,) int64`` is the time code of each of ``motion``'s frames.
 
     A channel equal at every frame (``scales`` always; ``translations`` of a rigid hand
     that keeps its bone lengths and does not move; any channel of a one-frame clip) is
@@ -156,7 +168,7 @@ def _author_animation(anim: UsdSkel.Animation, motion: JointMotion) -> None:
             if _is_constant(values):
                 layer.GetAttributeAtPath(path).default = to_vt(values[0])
                 continue
-            for frame, value in enumerate(map(to_vt, values)):
+            for frame, value in zip(frames.tolist(), map(to_vt, values), strict=True):
                 layer.SetTimeSample(path, frame, value)
 
 
@@ -190,6 +202,7 @@ def build_clip_stage(
     fps: float,
     units: str,
     hand: str,
+    frames: np.ndarray | None = None,
 ) -> Usd.Stage:
     """Build the in-memory stage of a clip (see the module doc for its layout).
 
@@ -210,13 +223,20 @@ def build_clip_stage(
         Clip length unit: ``mm``, ``cm``, ``m`` or ``in``.
     hand
         ``left`` or ``right``.
+    frames
+        ``(T,) int64`` increasing frame number (time code) of each of ``motion``'s frames;
+        ``None`` for ``0 .. T - 1``.
 
     Returns
     -------
     pxr.Usd.Stage
     """
+    frames = np.arange(motion.n_frames) if frames is None else np.asarray(frames, np.int64)
+    if frames.shape != (motion.n_frames,) or (np.diff(frames) <= 0).any():
+        raise ParameterError(f"frames must be {motion.n_frames} increasing frame numbers, one "
+                             f"per frame of the motion; got shape {frames.shape}")
     stage = _new_stage()
-    _set_stage_metadata(stage, motion.n_frames, fps, units)
+    _set_stage_metadata(stage, frames, fps, units)
     root = UsdSkel.Root.Define(stage, Sdf.Path(f"/{hand.capitalize()}Hand"))
     stage.SetDefaultPrim(root.GetPrim())
     root.GetPrim().SetCustomDataByKey("handdb:clipId", clip_id)
@@ -234,7 +254,7 @@ def build_clip_stage(
 
     anim = UsdSkel.Animation.Define(stage, root.GetPath().AppendChild(animation_name(clip_id)))
     anim.CreateJointsAttr(joints)
-    _author_animation(anim, turn_root(motion, skeleton, CAMERA_TO_Y_UP))
+    _author_animation(anim, turn_root(motion, skeleton, CAMERA_TO_Y_UP), frames)
     UsdSkel.BindingAPI.Apply(skel.GetPrim()).CreateAnimationSourceRel().SetTargets(
         [anim.GetPath()])
 
@@ -279,7 +299,9 @@ def export_clip_usd(
     skeleton
         Skeleton of ``xyz``.
     xyz
-        Joint positions, ``(T, J, 3) float64``, clip units, handdb's camera frame, no NaN.
+        Joint positions, ``(T, J, 3) float64``, clip units, handdb's camera frame; NaN where
+        a joint has no position. Only the frames that place every joint are animated (see
+        the module doc).
     bone_lengths
         ``(J,) float64`` length of the bone ending at each joint, clip units.
     fps
@@ -289,7 +311,8 @@ def export_clip_usd(
     hand
         ``left`` or ``right``.
     rotations
-        Local joint transforms to export instead of those computed from ``xyz``.
+        Local joint transforms of all ``T`` frames, to export instead of those computed
+        from ``xyz``.
     keep_lengths
         When computing the transforms: ``False`` reproduces ``xyz`` exactly, ``True``
         gives every bone its length from ``bone_lengths`` (see the module doc).
@@ -305,17 +328,20 @@ def export_clip_usd(
         On an unknown suffix, unit or hand, a non-positive fps, or arrays whose shapes do
         not match ``skeleton``.
     StageError
-        If the positions have NaN (fill gaps first) or usd-core cannot write the file.
+        If no frame places every joint, or usd-core cannot write the file.
     """
     path = Path(path)
     if path.suffix not in (*LAYER_SUFFIXES, USDZ_SUFFIX):
         raise ParameterError(f"{path}: the suffix must be one of {(*LAYER_SUFFIXES, USDZ_SUFFIX)}")
     xyz, bone_lengths = check_skinned_clip(skeleton, xyz, bone_lengths, fps=fps, units=units,
                                            hand=hand)
+    frames = None
     if rotations is None:
-        require_filled(xyz, f"clip '{clip_id}'")
-        rotations = joint_rotations(xyz, skeleton, bone_lengths, keep_lengths=keep_lengths)
+        frames = placed_frames(xyz, f"clip '{clip_id}'")
+        placed = xyz if len(frames) == len(xyz) else xyz[frames]
+        rotations = joint_rotations(placed, skeleton, bone_lengths, keep_lengths=keep_lengths)
     stage = build_clip_stage(clip_id=clip_id, skeleton=skeleton, motion=rotations,
-                             bone_lengths=bone_lengths, fps=fps, units=units, hand=hand)
+                             bone_lengths=bone_lengths, fps=fps, units=units, hand=hand,
+                             frames=frames)
     _write_atomically(stage, path)
     return path

@@ -47,7 +47,7 @@ from handdb.lengths.estimate import (
     sized_by_kind,
     sized_like,
 )
-from handdb.lengths.ratios import bone_ratios, joint_ratios, table1_measurements
+from handdb.lengths.ratios import bone_ratios, table1_ratios
 from handdb.store import tables
 
 #: Every source of a bone length, most direct first.
@@ -111,6 +111,17 @@ def _hand_length(clip: Clip, known: np.ndarray) -> tuple[float, float, str]:
     return length, spread, "population"
 
 
+def _median_and_spread(values: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Median of each column of ``values`` ``(n, k)`` and the spread of that median.
+
+    The spread is the median absolute deviation as a standard deviation, over
+    ``sqrt(n)``; both are ``(k,)``, in the unit of ``values``.
+    """
+    median = np.median(values, axis=0)
+    mad = np.median(np.abs(values - median), axis=0)
+    return median, MAD_TO_SIGMA * mad / np.sqrt(len(values))
+
+
 def _truth(clip: Clip) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Median length of every bone in the ground truth, its spread and its frames."""
     skeleton = clip.skeleton
@@ -119,12 +130,16 @@ def _truth(clip: Clip) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     if clip.truth is None:
         return median, spread, frames
     per_frame = frame_bone_lengths(clip.truth, skeleton)
-    for j in skeleton.bones[:, 1]:
-        values = per_frame[np.isfinite(per_frame[:, j]), j]
+    seen = np.isfinite(per_frame)
+    bones = skeleton.bones[:, 1]
+    complete = bones[seen[:, bones].all(axis=0)]          # in every frame: taken together
+    if len(complete):
+        median[complete], spread[complete] = _median_and_spread(per_frame[:, complete])
+        frames[complete] = len(per_frame)
+    for j in np.setdiff1d(bones, complete):
+        values = per_frame[seen[:, j], j]
         if len(values):
-            median[j] = np.median(values)
-            spread[j] = MAD_TO_SIGMA * np.median(np.abs(values - median[j])) / np.sqrt(
-                len(values))
+            (median[j],), (spread[j],) = _median_and_spread(values[:, None])
             frames[j] = len(values)
     return median, spread, frames
 
@@ -151,7 +166,7 @@ def clip_bone_lengths(clip: Clip, ratios: pa.Table | None = None) -> BoneLengths
     """
     skeleton, spec = clip.skeleton, clip.spec
     if ratios is None or ratios.num_rows == 0:
-        ratios = joint_ratios(table1_measurements())
+        ratios = table1_ratios()
     n = skeleton.n_joints
     sidecar = Path(spec.path).name
     given = np.array([spec.bone_lengths.get(j, np.nan) for j in skeleton.joints])

@@ -28,6 +28,7 @@ from functools import cache
 
 import numpy as np
 
+from handdb.compiled import kernel
 from handdb.hand.anatomy import MEAN_HAND_LENGTH_MM
 from handdb.hand.shape import mean_shape
 from handdb.hand.skeletons import Skeleton, frame_bone_lengths, load_skeleton
@@ -101,15 +102,15 @@ class Estimate:
     n_frames: np.ndarray
 
 
-def clip_scale(uv: np.ndarray, skeleton: Skeleton, lengths: np.ndarray) -> np.ndarray:
+def clip_scale(projected: np.ndarray, lengths: np.ndarray) -> np.ndarray:
     """Each frame's image scale from bone lengths.
 
     Parameters
     ----------
-    uv
-        ``(T, J, 2) float64``, pixels; NaN where a point is missing.
-    skeleton
-        The skeleton of the joint axis.
+    projected
+        ``(T, J) float64`` image length of the bone ending at each joint, pixels
+        (:func:`~handdb.hand.skeletons.frame_bone_lengths` of the 2D points); NaN where
+        an end is missing.
     lengths
         ``(J,) float64`` bone lengths, clip units; NaN where unknown.
 
@@ -119,7 +120,6 @@ def clip_scale(uv: np.ndarray, skeleton: Skeleton, lengths: np.ndarray) -> np.nd
         ``(T,) float64``, pixels per clip unit; NaN when no bone of known length is ever
         seen. With :data:`ROBUST_SCALE_BONES` lengths or more, one bone may jitter.
     """
-    projected = frame_bone_lengths(uv, skeleton)
     rank = 2 if np.isfinite(lengths).sum() >= ROBUST_SCALE_BONES else 1
     bounds = eq6_scale(projected, lengths, rank=rank)
     return smooth_scale(bounds, percentile=SCALE_PERCENTILE, half_window=SCALE_HALF_WINDOW)
@@ -131,32 +131,49 @@ def running_median(values: np.ndarray, frames: int) -> np.ndarray:
     ``values`` is ``(T, N)``; NaNs are ignored, and a row stays NaN where it was or where
     fewer than half its window is finite. The ends use the windows that fit.
 
-    Each window is sorted (NaN last) and its median read off its ``n`` finite values as
-    the mean of ranks ``(n - 1) // 2`` and ``n // 2``, as :func:`numpy.nanmedian` gives
-    it, without that function's cost per window.
+    Each window's ``n`` finite values are sorted and its median read off them as the
+    mean of ranks ``(n - 1) // 2`` and ``n // 2``, as :func:`numpy.nanmedian` gives it,
+    without that function's cost per window.
     """
     if frames <= 1 or len(values) < frames:
         return values.copy()
+    median = np.empty(values.shape)
+    _running_median(np.ascontiguousarray(values, dtype=np.float64), frames, median)
+    return median
+
+
+@kernel
+def _running_median(values, frames, median):
+    """Fill ``median`` ``(T, N)`` with :func:`running_median` of ``values`` ``(T, N)``."""
+    n_frames, n_columns = values.shape
     half = frames // 2
-    padded = np.pad(values, ((half, half), (0, 0)), constant_values=np.nan)
-    windows = np.sort(np.lib.stride_tricks.sliding_window_view(padded, frames, axis=0),
-                      axis=-1)
-    finite = np.isfinite(windows).sum(axis=-1)
-    low = np.take_along_axis(windows, (np.maximum(finite, 1)[..., None] - 1) // 2, axis=-1)
-    high = np.take_along_axis(windows, finite[..., None] // 2, axis=-1)
-    median = (low[..., 0] + high[..., 0]) / 2
-    return np.where((finite * 2 >= frames) & np.isfinite(values), median, np.nan)
+    window = np.empty(frames)
+    for column in range(n_columns):
+        for t in range(n_frames):
+            median[t, column] = np.nan
+            if not np.isfinite(values[t, column]):
+                continue
+            n = 0
+            for s in range(max(0, t - half), min(n_frames, t + half + 1)):
+                value = values[s, column]
+                if np.isfinite(value):
+                    k = n                               # insertion sort, ascending
+                    while k > 0 and window[k - 1] > value:
+                        window[k] = window[k - 1]
+                        k -= 1
+                    window[k] = value
+                    n += 1
+            if 2 * n >= frames:
+                median[t, column] = (window[(n - 1) // 2] + window[n // 2]) / 2
 
 
-def envelope_lengths(uv: np.ndarray, skeleton: Skeleton, scale: np.ndarray) -> Estimate:
+def envelope_lengths(projected: np.ndarray, scale: np.ndarray) -> Estimate:
     """Every bone's length from its least-foreshortened appearances.
 
     Parameters
     ----------
-    uv
-        ``(T, J, 2) float64``, pixels; NaN where missing.
-    skeleton
-        The skeleton of the joint axis.
+    projected
+        ``(T, J) float64`` image bone lengths, pixels, as for :func:`clip_scale`.
     scale
         ``(T,) float64``, pixels per clip unit (:func:`clip_scale`).
 
@@ -165,8 +182,8 @@ def envelope_lengths(uv: np.ndarray, skeleton: Skeleton, scale: np.ndarray) -> E
     Estimate
         Lengths of the bones seen in at least :data:`MIN_ENVELOPE_FRAMES` frames.
     """
-    ratio = running_median(frame_bone_lengths(uv, skeleton) / scale[:, None], JITTER_FRAMES)
-    n = skeleton.n_joints
+    ratio = running_median(projected / scale[:, None], JITTER_FRAMES)
+    n = projected.shape[1]
     lengths, spread = np.full(n, np.nan), np.full(n, np.nan)
     seen = np.isfinite(ratio).sum(axis=0)
     for j in np.flatnonzero(seen >= MIN_ENVELOPE_FRAMES):
@@ -198,9 +215,10 @@ def image_proportions(uv: np.ndarray, skeleton: Skeleton, prior: np.ndarray) -> 
     Estimate
         Lengths in the unit of ``prior`` roughly, to be sized by :func:`sized_like`.
     """
+    projected = frame_bone_lengths(uv, skeleton)
     lengths = prior
     for _ in range(PROPORTION_ROUNDS):
-        images = envelope_lengths(uv, skeleton, clip_scale(uv, skeleton, lengths))
+        images = envelope_lengths(projected, clip_scale(projected, lengths))
         if not np.isfinite(images.lengths).any():
             return images
         lengths = images.lengths

@@ -176,6 +176,16 @@ def joint_ratios(measurements: pa.Table, decimals: int | None = PAPER_DECIMALS) 
     })
 
 
+@cache
+def table1_ratios() -> pa.Table:
+    """Table ``joint_ratios`` of the paper's Table 1 (:func:`table1_measurements`).
+
+    Worked out once per process: every clip of a build without X-ray tables of its own
+    sizes its phalanges by it.
+    """
+    return joint_ratios(table1_measurements())
+
+
 def finger_ratios(ratios: pa.Table, finger: str, cohort: str = ALL_COHORT) -> pa.Table:
     """Return the rows of ``ratios`` (table ``joint_ratios``) for one finger and cohort.
 

@@ -73,6 +73,19 @@ def test_a_posed_format_skips_the_clip_with_unplaced_joints(database, tmp_path):
             "needs every joint posed") in result.stderr
 
 
+def test_usd_keys_the_frames_that_place_every_joint(database, tmp_path):
+    db, motions = database
+    result = export("--db", db, "--format", "usd", "--out", tmp_path / "usd", GAPPY)
+    assert result.exit_code == 0, result.output
+    clip = open_skeleton(tmp_path / "usd" / f"{GAPPY}.usd")
+    rotations = clip.skel_query.GetAnimQuery().GetPrim().GetAttribute("rotations")
+    assert rotations.GetTimeSamples() == [f for f in range(12) if f not in (4, 5)]
+    keyed = [0, 3, 6, 11]
+    placed = y_up(at_origin(motions[GAPPY], load_skeleton("mediapipe21")))
+    np.testing.assert_allclose(joint_world_positions(clip, 12)[keyed], placed[keyed],
+                               atol=1e-3)
+
+
 def test_named_clips_only_and_in_their_order(database, tmp_path):
     db, motions = database
     result = export("--db", db, "--format", "c3d", "--out", tmp_path, "bravo", "gappy")

@@ -140,7 +140,7 @@ def test_an_unstorable_xray_name_and_an_oversized_track_are_refused_and_the_rest
     assert {Path(f).name for f in stored} >= {xray.name, big.name}
 
 
-def test_a_clip_whose_joints_cannot_all_be_placed_is_flagged_for_its_missing_export(
+def test_a_clip_whose_joints_cannot_all_be_placed_is_flagged_and_keys_the_rest(
         inbox, tmp_path):
     options = BuildOptions()
     [entry] = [e for e in discover(inbox).clips if e.clip_id == "alpha"]
@@ -151,8 +151,13 @@ def test_a_clip_whose_joints_cannot_all_be_placed_is_flagged_for_its_missing_exp
     xyz[10:15, 3] = np.nan
     unplaced = replace(result, lifted=replace(result.lifted, xyz=xyz))
     exported = stages.export(unplaced, Store(str(tmp_path / "db")), options)
-    assert exported.usd_path is None
-    [reason] = [r for r in exported.verdict.reasons if r.startswith("no USD")]
-    assert "5 joint positions in 5 frames (from frame 10)" in reason
+    assert exported.usd_path == "usd/alpha.usd"
+    [reason] = [r for r in exported.verdict.reasons if r.startswith("USD animates")]
+    assert f"frames 0-{len(xyz) - 1}: 5 joint positions in 5 frames (from frame 10)" in reason
     assert exported.verdict.rows[10:15, 3].all() and exported.verdict.flagged
-    assert not list((tmp_path / "db").rglob("*.usd"))
+    xyz[:] = np.nan
+    nowhere = stages.export(replace(result, lifted=replace(result.lifted, xyz=xyz)),
+                            Store(str(tmp_path / "db2")), options)
+    assert nowhere.usd_path is None
+    assert any(r.startswith("no USD or preview written") for r in nowhere.verdict.reasons)
+    assert not list((tmp_path / "db2").rglob("*.usd"))

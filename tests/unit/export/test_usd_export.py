@@ -134,10 +134,34 @@ def test_left_hand_and_reexport_over_an_existing_file(tmp_path):
     assert sorted(p.name for p in tmp_path.iterdir()) == ["c.usd"]
 
 
+def test_only_the_frames_that_place_every_joint_are_keyed(mediapipe_motion, tmp_path):
+    """Empty first and last frames (a detector saw nothing) leave the observed span keyed:
+    USD holds its end poses outside it and bridges a frame inside it that lacks a joint."""
+    xyz = mediapipe_motion.xyz.copy()
+    xyz[:2] = np.nan
+    xyz[-3:] = np.nan
+    xyz[20, 7] = np.nan
+    clip = open_skeleton(export(mediapipe_motion, tmp_path / "c.usda", xyz=xyz))
+    keyed = [f for f in range(2, 37) if f != 20]
+    anim = UsdSkel.Animation(clip.stage.GetPrimAtPath("/RightHand/clip_01"))
+    assert anim.GetRotationsAttr().GetTimeSamples() == keyed
+    assert anim.GetTranslationsAttr().GetTimeSamples() == keyed
+    assert (clip.stage.GetStartTimeCode(), clip.stage.GetEndTimeCode()) == (2, 36)
+    assert validation_errors(clip.stage) == []
+    stage_xyz = joint_world_positions(clip, len(xyz))
+    camera_xyz = CAMERA_TO_Y_UP.inv().apply(stage_xyz.reshape(-1, 3)).reshape(stage_xyz.shape)
+    tolerance = 1e-4 * mediapipe_motion.bone_lengths[mediapipe_motion.bone_lengths > 0].min()
+    assert np.abs(camera_xyz[keyed] - xyz[keyed]).max() < tolerance
+    np.testing.assert_allclose(camera_xyz[:2], camera_xyz[[2, 2]], atol=1e-9)
+    np.testing.assert_allclose(camera_xyz[-3:], camera_xyz[[36] * 3], atol=1e-9)
+    between = np.linalg.norm(camera_xyz[20] - xyz[[19, 21]].mean(axis=0), axis=-1)
+    assert between.max() < np.linalg.norm(xyz[21] - xyz[19], axis=-1).max()
+
+
 def test_missing_positions_and_bad_arguments_are_refused(mediapipe_motion, tmp_path):
     xyz = mediapipe_motion.xyz.copy()
-    xyz[3, 7] = np.nan
-    with pytest.raises(StageError, match="1 of 40 frames"):
+    xyz[:, 7] = np.nan
+    with pytest.raises(StageError, match="none of its 40 frames places every joint"):
         export(mediapipe_motion, tmp_path / "c.usd", xyz=xyz)
     with pytest.raises(ValueError, match="suffix"):
         export(mediapipe_motion, tmp_path / "c.fbx")
