@@ -163,10 +163,9 @@ def place_from_rest_pose(
     """Place never-observed ``joints`` by fitting the rest pose to each frame's hand.
 
     In each of the :func:`placeable_frames` the rest pose is fitted to every joint the
-    frame observes: a fingertip is placed from its own finger's joints as well as the
-    palm (against the palm alone: never-found fingertips 31-113 % of the hand's size
-    off on the real clips of ``benchmarks/gapfill_dropouts.py``, 19-44 % now). The other
-    frames are left to the caller.
+    frame observes, so a fingertip is placed from its own finger's joints as well as the
+    palm (how far off that leaves it, real and synthetic: ``benchmarks/RESULTS-gapfill.md``).
+    The other frames are left to the caller.
 
     Parameters
     ----------
