@@ -29,7 +29,7 @@ from scipy.optimize import least_squares
 from handdb.checks import mm_per_unit
 from handdb.hand.model import N_DOF, HandModel, forward_kinematics
 from handdb.lengths.bone_lengths import BoneLengths
-from handdb.lengths.ratios import bone_ratios, joint_ratios, table1_measurements
+from handdb.lengths.ratios import bone_ratios, table1_ratios
 from handdb.markers.solve import SOLVER_TOLERANCE, fit_pose_lsq, initial_pose
 
 #: Calibration frames fitted together.
@@ -135,7 +135,7 @@ def default_ratio_prior(model: HandModel) -> tuple[np.ndarray, np.ndarray]:
     From the X-ray statistics of Chaudhry et al.'s Table 1 (cohort ``all``); NaN for bones
     that are not phalanges.
     """
-    return bone_ratios(model.skeleton, joint_ratios(table1_measurements()))
+    return bone_ratios(model.skeleton, table1_ratios())
 
 
 class _Problem:
