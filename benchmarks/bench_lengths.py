@@ -4,13 +4,17 @@ For each dataset, each scenario of what the user knows (the five proximal phalan
 middle finger's proximal phalanx alone, nothing) and pixel noise of 0 and 2 px, prints the
 mean absolute error of the bones not given (mm), the same for the thesis's reference hand
 (one frame assumed flat, :func:`handdb.lengths.estimate.reference_frame_lengths`), the
-worst relative error, and the share of bones whose error lies within two of the
-uncertainties the default reports.
+worst relative error, the share of bones whose error lies within two of the
+uncertainties the default reports, and the median of those uncertainties (mm).
 
 Datasets, all seen through a pinhole camera (500 px focal length):
 
 * ``synthetic``: hands of the population (:mod:`handdb.hand.population`), four motions,
-  six seeds, 300 frames;
+  six seeds, 300 frames; and the same hands in clips that show less: the first
+  :data:`SHORT_FRAMES` frames, one pose held for the whole clip (its middle frame), and
+  every joint jittered in 3D by :data:`JITTER_MM` per frame, so that the bones change
+  length from frame to frame as a tracker's do (the truth is then each bone's median
+  length, as for DHG);
 * ``DHG``: the real DHG sample (``../shared/data/dhg-sample``, a depth tracker's joints,
   95 frames), eight random views at 400 mm, its median bone lengths the truth;
 * ``InterHand``: the bone lengths of the real InterHand2.6M hands
@@ -60,6 +64,8 @@ SYNTHETIC_MOTIONS = ("rapid", "wave", "random", "clench")
 SYNTHETIC_SEEDS = range(6)
 N_FRAMES = 300
 DHG_VIEWS, DHG_DISTANCE_MM = 8, 400.0
+SHORT_FRAMES = 30
+JITTER_MM = 3.0
 INTERHAND_DISTANCE_MM = 350.0
 
 
@@ -74,7 +80,8 @@ def as_clip(uv: np.ndarray, skeleton: Skeleton, known: dict[str, float], folder:
 
 
 def score(uv: np.ndarray, skeleton: Skeleton, truth: np.ndarray, folder: Path) -> dict:
-    """Per scenario: (default error, reference-frame error, worst relative, coverage)."""
+    """Per scenario: (default error, reference-frame error, worst relative, coverage,
+    median uncertainty)."""
     out = {}
     for name, joints in SCENARIOS.items():
         known = {j: float(truth[skeleton.index(j)]) for j in joints}
@@ -87,7 +94,8 @@ def score(uv: np.ndarray, skeleton: Skeleton, truth: np.ndarray, folder: Path) -
             reference = np.nanmean(np.abs(reference_frame_lengths(uv, skeleton, given)
                                           - truth)[unknown])
         out[name] = (error.mean(), reference, (error / truth[unknown]).max(),
-                     np.mean(error < 2.0 * result.uncertainty[unknown]))
+                     np.mean(error < 2.0 * result.uncertainty[unknown]),
+                     np.median(result.uncertainty[unknown]))
     return out
 
 
@@ -96,7 +104,7 @@ def report(label: str, rows: list[dict]) -> None:
         a = np.array([r[name] for r in rows])
         reference = f"{np.nanmean(a[:, 1]):6.2f}" if np.isfinite(a[:, 1]).any() else "     -"
         print(f"| {label} | {name} | {a[:, 0].mean():.2f} | {reference} | "
-              f"{a[:, 2].max():.2f} | {a[:, 3].mean():.2f} |")
+              f"{a[:, 2].max():.2f} | {a[:, 3].mean():.2f} | {np.median(a[:, 4]):.2f} |")
 
 
 def median_lengths(xyz: np.ndarray, skeleton: Skeleton) -> np.ndarray:
@@ -104,20 +112,31 @@ def median_lengths(xyz: np.ndarray, skeleton: Skeleton) -> np.ndarray:
 
 
 def synthetic(noise: float, folder: Path) -> None:
-    rows = []
+    variants = {"": [], f", first {SHORT_FRAMES} frames": [], ", held pose": [],
+                f", joints jittered {JITTER_MM:g} mm": []}
     for seed in SYNTHETIC_SEEDS:
         for motion in SYNTHETIC_MOTIONS:
             clip = synthesize_clip(motion, N_FRAMES, seed=seed, noise_px=noise,
                                    camera="pinhole")
             skeleton = load_skeleton(clip.skeleton)
             truth = np.array([clip.bone_lengths.get(j, np.nan) for j in skeleton.joints])
-            rows.append(score(clip.uv, skeleton, truth, folder))
-    report(f"synthetic, {noise:g} px", rows)
+            rng = np.random.default_rng(seed)
+            held = np.repeat(clip.xyz[N_FRAMES // 2][None], N_FRAMES, axis=0)
+            jittered = clip.xyz + rng.normal(0.0, JITTER_MM, clip.xyz.shape)
+            rows = iter(variants.values())
+            next(rows).append(score(clip.uv, skeleton, truth, folder))
+            next(rows).append(score(clip.uv[:SHORT_FRAMES], skeleton, truth, folder))
+            for xyz, lengths in ((held, truth), (jittered, median_lengths(jittered, skeleton))):
+                uv = project_pinhole(xyz, FOCAL_PX, FOCAL_PX, *CENTRE_PX)
+                next(rows).append(score(uv + rng.normal(0.0, noise, uv.shape), skeleton,
+                                        lengths, folder))
+    for variant, rows in variants.items():
+        report(f"synthetic{variant}, {noise:g} px", rows)
 
 
 def dhg(noise: float, folder: Path) -> None:
     if not DHG.is_file():
-        print(f"| DHG | absent: {DHG} | | | | |")
+        print(f"| DHG | absent: {DHG} | | | | | |")
         return
     xyz = np.loadtxt(DHG).reshape(-1, 22, 3) * 1000.0
     skeleton = load_skeleton("dhg22")
@@ -135,7 +154,7 @@ def dhg(noise: float, folder: Path) -> None:
 
 def interhand(noise: float, folder: Path) -> None:
     if not INTERHAND.is_file():
-        print(f"| InterHand | absent: {INTERHAND} | | | | |")
+        print(f"| InterHand | absent: {INTERHAND} | | | | | |")
         return
     skeleton = load_skeleton("mediapipe21")
     rows = []
@@ -158,8 +177,8 @@ def interhand(noise: float, folder: Path) -> None:
 
 def main() -> None:
     print("| dataset | known | default mm | reference frame mm | worst relative | "
-          "within 2 sd |")
-    print("|---|---|---:|---:|---:|---:|")
+          "within 2 sd | median sd mm |")
+    print("|---|---|---:|---:|---:|---:|---:|")
     with tempfile.TemporaryDirectory() as folder:
         for noise in NOISE_PX:
             for dataset in (dhg, interhand, synthetic):

@@ -23,7 +23,11 @@ spreads what each kind of evidence says:
    at all: the clip is then as large as an average hand, within the population's spread.
 
 Every estimated length has an uncertainty (one standard deviation, clip units) in the
-``bone_lengths`` table.
+``bone_lengths`` table: the spreads of its evidence combined, widened by as much as the
+evidence disagrees over the clip's bones beyond those spreads
+(:func:`~handdb.lengths.estimate.consistency_ratio`: a held pose or a short clip gives
+envelopes that disagree with the proportions), and the hand length's spread when that
+alone sizes the clip (shared by every kind of evidence, it is not averaged away).
 """
 
 from __future__ import annotations
@@ -38,6 +42,7 @@ from handdb.clip import Clip
 from handdb.hand.skeletons import Skeleton, frame_bone_lengths
 from handdb.lengths.estimate import (
     combine,
+    consistency_ratio,
     hand_length_from,
     image_proportions,
     palm_bones,
@@ -183,22 +188,31 @@ def clip_bone_lengths(clip: Clip, ratios: pa.Table | None = None) -> BoneLengths
             details[j] = f"median over {truth_frames[j]} frames of the ground truth"
 
     hand_length, hand_spread, hand_origin = _hand_length(clip, lengths)
-    proportions = proportion_lengths(skeleton, hand_length, hand_spread)
+    # Known bones size the images, and the proportions by a hand length of their own
+    # errors; without one, the hand length sizes every kind of evidence alike, so its
+    # spread is shared and joins after they are combined, not once per kind.
+    sized = bool(np.isfinite(lengths).any())
+    own_spread, shared_spread = (hand_spread, 0.0) if sized else (0.0, hand_spread)
+    proportions = proportion_lengths(skeleton, hand_length, own_spread)
     uv = np.where(clip.observed[..., None], clip.uv, np.nan)
     shape = image_proportions(uv, skeleton, proportions.lengths)
-    if np.isfinite(lengths).any():
+    if sized:
         images = sized_by_kind(shape, lengths, palm_bones(skeleton))
     else:
-        images = sized_like(shape, proportion_lengths(skeleton, hand_length), hand_spread)
+        images = sized_like(shape, proportions)
     mean_ratio, _ = bone_ratios(skeleton, ratios)
     phalanges = ratio_lengths(skeleton, np.where(np.isfinite(lengths), lengths,
                                                  images.lengths), mean_ratio)
-    estimate = combine([images, proportions, phalanges])
+    evidence = [images, proportions, phalanges]
+    estimate = combine(evidence)
+    estimated = np.array([j for j in skeleton.bones[:, 1] if sources[j] is None], dtype=int)
+    widening = consistency_ratio(evidence, estimate, estimated)
+    spread = np.hypot(widening * estimate.spread, shared_spread)
     for j in skeleton.bones[:, 1]:
         if sources[j] is not None or not np.isfinite(estimate.lengths[j]):
             continue
         lengths[j] = estimate.lengths[j]
-        uncertainty[j] = estimate.spread[j] * estimate.lengths[j]
+        uncertainty[j] = spread[j] * estimate.lengths[j]
         if np.isfinite(images.lengths[j]):
             sources[j] = "clip"
             details[j] = (f"upper envelope over {images.n_frames[j]} frames of its image "

@@ -413,6 +413,43 @@ def combine(estimates: list[Estimate]) -> Estimate:
                     np.where(found, frames, 0))
 
 
+def consistency_ratio(estimates: list[Estimate], combined: Estimate, bones: np.ndarray
+                      ) -> float:
+    """How much more the estimates disagree than their spreads allow, over a clip's bones.
+
+    The Birge ratio: ``sqrt(chi2 / dof)`` of the estimates about their combination
+    (:func:`combine`), pooled over ``bones``, in log length; each bone given by ``n``
+    estimates adds ``n - 1`` degrees of freedom. Evidence that agrees within its spreads
+    gives about 1; evidence that says more than it knows (an envelope from a held pose or a
+    short clip, proportions of an annotation that puts its joints elsewhere) gives more,
+    and each combined spread is too small by about that factor.
+
+    Parameters
+    ----------
+    estimates
+        The evidence :func:`combine` combined.
+    combined
+        Their combination.
+    bones
+        ``(B,) int``: the bones (by child joint) to pool over, the ones being estimated.
+
+    Returns
+    -------
+    float
+        At least 1 (evidence that agrees better than its spreads does not make them
+        smaller); 1 when no bone has two estimates.
+    """
+    logs = np.stack([np.log(e.lengths[bones]) for e in estimates])
+    spreads = np.stack([e.spread[bones] for e in estimates])
+    given = np.isfinite(logs) & np.isfinite(spreads)
+    z = np.where(given, (logs - np.log(combined.lengths[bones])) / np.where(given, spreads, 1.0),
+                 0.0)
+    dof = np.maximum(given.sum(axis=0) - 1, 0).sum()
+    if dof == 0:
+        return 1.0
+    return max(1.0, float(np.sqrt(np.sum(z ** 2) / dof)))
+
+
 def reference_frame_lengths(uv: np.ndarray, skeleton: Skeleton, known: np.ndarray
                             ) -> np.ndarray:
     """The thesis's reference hand (Nopvichai 2009, §3.2), the baseline of this module.

@@ -12,6 +12,8 @@ from handdb.hand.skeletons import load_skeleton
 from handdb.lengths.bone_lengths import SOURCES, bone_lengths_table, clip_bone_lengths
 from handdb.lengths.estimate import (
     Estimate,
+    combine,
+    consistency_ratio,
     hand_proportions,
     image_proportions,
     palm_bones,
@@ -96,6 +98,61 @@ def test_one_length_or_a_hand_length_gives_a_hand_of_the_right_size(seed, motion
         # the population's hands differ in length by 6 % (1 sd); these sizes do not
         assert abs(np.median(ratio) - 1.0) < 0.07
         assert np.std(np.log(ratio)) < 0.1
+
+
+@pytest.mark.parametrize("seed, motion", [(1, "random"), (2, "clench")])
+def test_a_held_pose_reports_an_uncertainty_that_covers_its_errors(seed, motion):
+    # one pose held for the whole clip: the envelope is one view's foreshortened length,
+    # which the images alone cannot tell from the bone's length; the envelopes then
+    # disagree with the hand's proportions, and the uncertainty must say so (these clips
+    # covered 11 % and 32 % of their errors at two standard deviations before it did)
+    synthetic = synthesize_clip(motion, 120, seed=seed, camera="pinhole", noise_px=1.0)
+    held = replace(synthetic, uv=np.repeat(synthetic.uv[60][None], 120, axis=0))
+    clip = held.as_clip("s")
+    skeleton = clip.skeleton
+    truth = np.array([synthetic.bone_lengths.get(j, np.nan) for j in skeleton.joints])
+    known = {"middle_pip": float(truth[skeleton.index("middle_pip")])}
+    clip = replace(clip, truth=None, spec=replace(clip.spec, bone_lengths=known))
+    result = clip_bone_lengths(clip)
+    unknown = [j for j in skeleton.bones[:, 1] if skeleton.joints[j] not in known]
+    error = np.abs(result.lengths - truth)[unknown]
+    assert np.mean(error < 2.0 * result.uncertainty[unknown]) >= 0.85
+
+
+def test_a_moving_hand_keeps_its_uncertainty():
+    # evidence that agrees within its spreads is not widened
+    clip, truth = population_clip(0, "random")
+    skeleton = clip.skeleton
+    known = {"middle_pip": float(truth[skeleton.index("middle_pip")])}
+    result = clip_bone_lengths(replace(clip, spec=replace(clip.spec, bone_lengths=known)))
+    unknown = [j for j in skeleton.bones[:, 1] if skeleton.joints[j] not in known]
+    relative = result.uncertainty[unknown] / result.lengths[unknown]
+    assert np.median(relative) < 0.08
+
+
+def test_consistency_ratio_is_the_disagreement_beyond_the_spreads():
+    bones = np.arange(1, 5)
+    lengths = np.array([np.nan, 10.0, 20.0, 30.0, 40.0])
+    spread = np.full(5, 0.05)
+    frames = np.zeros(5, dtype=np.int64)
+    a = Estimate(lengths, spread, frames)
+    agreeing = Estimate(lengths * np.exp(0.05 * np.array([0, 1, -1, 1, -1])), spread, frames)
+    assert consistency_ratio([a, agreeing], combine([a, agreeing]), bones) == 1.0
+    # each pair 0.3 apart in log, 0.05 each: 0.15 from their mean, 3 spreads, chi2 18 per
+    # bone on one degree of freedom
+    apart = Estimate(lengths * np.exp(0.3), spread, frames)
+    assert consistency_ratio([a, apart], combine([a, apart]), bones) == pytest.approx(
+        np.sqrt(18.0))
+    lone = Estimate(np.where(bones[0] == np.arange(5), 12.0, np.nan), spread, frames)
+    assert consistency_ratio([a, lone], combine([a, lone]), bones[1:]) == 1.0
+
+
+def test_without_a_length_every_bone_keeps_the_hand_lengths_spread(make_clip):
+    # the population's hand length sizes the images and the proportions alike: its 6 %
+    # is not averaged away by combining them
+    result = clip_bone_lengths(make_clip(LONG_CURL))
+    bones = result.skeleton.bones[:, 1]
+    assert np.all(result.uncertainty[bones] / result.lengths[bones] >= 0.06)
 
 
 def test_the_palm_is_sized_by_its_own_known_bones():
