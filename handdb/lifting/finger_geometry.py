@@ -14,13 +14,13 @@ positive (deeper) choice.
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 import numpy as np
 
 from handdb.compiled import kernel
 from handdb.hand.layout import HandLayout
+from handdb.lifting.pinhole import ray_solutions
 
 
 @dataclass(frozen=True)
@@ -85,31 +85,6 @@ def perspective_candidates(rays: np.ndarray, palm_xyz: np.ndarray, bone_lengths:
 
 
 @kernel
-def _ray_root(rays, t, joint, ox, oy, oz, length, far, out):
-    """Write into ``out`` the far (``far`` true) or near point of a ray at a distance.
-
-    The ray is ``joint``'s in frame ``t``, the distance ``length`` (clip units) from
-    ``(ox, oy, oz)``; ``out`` is ``(3,)``.
-
-    The arithmetic of :func:`handdb.lifting.pinhole.ray_roots`, operation for operation,
-    so that the points are bit for bit the same; NaN propagates as there.
-    """
-    rx, ry, rz = rays[t, joint, 0], rays[t, joint, 1], rays[t, joint, 2]
-    a = rx * rx + ry * ry + rz * rz
-    b = rx * ox + ry * oy + rz * oz
-    nearest = b / a
-    miss_sq = ox * ox + oy * oy + oz * oz - b * nearest
-    if miss_sq < 0.0:
-        miss_sq = 0.0
-    reach = length * length - miss_sq
-    if reach < 0.0:
-        reach = 0.0
-    half_chord = math.sqrt(reach / a)
-    depth = nearest + half_chord if far else nearest - half_chord
-    out[0], out[1], out[2] = rx * depth, ry * depth, rz * depth
-
-
-@kernel
 def _chain_candidates(rays, palm_xyz, chains, chain_bases, lengths, first, second, third,
                       first_bone, second_bone, third_bone):
     """Fill the chain joints and the bone vectors ending at them.
@@ -120,22 +95,24 @@ def _chain_candidates(rays, palm_xyz, chains, chain_bases, lengths, first, secon
     for t in range(rays.shape[0]):
         for p in range(2):
             for f in range(chains.shape[0]):
-                base = palm_xyz[t, p, chain_bases[f]]
+                _place(rays, t, chains[f, 0], palm_xyz[t, p, chain_bases[f]], lengths[f, 0],
+                       first[t, p, f], first_bone[t, p, f])
                 for a in range(2):
-                    one = first[t, p, f, a]
-                    _ray_root(rays, t, chains[f, 0], base[0], base[1], base[2],
-                              lengths[f, 0], a == 0, one)
-                    for k in range(3):
-                        first_bone[t, p, f, a, k] = one[k] - base[k]
+                    _place(rays, t, chains[f, 1], first[t, p, f, a], lengths[f, 1],
+                           second[t, p, f, a], second_bone[t, p, f, a])
                     for b in range(2):
-                        two = second[t, p, f, a, b]
-                        _ray_root(rays, t, chains[f, 1], one[0], one[1], one[2],
-                                  lengths[f, 1], b == 0, two)
-                        for k in range(3):
-                            second_bone[t, p, f, a, b, k] = two[k] - one[k]
-                        for c in range(2):
-                            three = third[t, p, f, a, b, c]
-                            _ray_root(rays, t, chains[f, 2], two[0], two[1], two[2],
-                                      lengths[f, 2], c == 0, three)
-                            for k in range(3):
-                                third_bone[t, p, f, a, b, c, k] = three[k] - two[k]
+                        _place(rays, t, chains[f, 2], second[t, p, f, a, b], lengths[f, 2],
+                               third[t, p, f, a, b], third_bone[t, p, f, a, b])
+
+
+@kernel
+def _place(rays, t, joint, origin, length, points, bones):
+    """Both points of ``joint``'s ray at ``length`` from ``origin`` ``(3,)``, far first.
+
+    Into ``points`` ``(2, 3)``, and the vectors from ``origin`` to them into ``bones``.
+    """
+    far, near, _ = ray_solutions(rays, t, joint, origin[0], origin[1], origin[2], length)
+    for sign, depth in enumerate((far, near)):
+        for k in range(3):
+            points[sign, k] = rays[t, joint, k] * depth
+            bones[sign, k] = points[sign, k] - origin[k]

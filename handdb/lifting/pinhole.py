@@ -115,23 +115,61 @@ def walk_rays(rays: np.ndarray, root_depth: np.ndarray, skeleton: Skeleton,
         ``(T, J) float64`` >= 0, clip units: how much farther than its bone length the ray
         passes from the parent (0 at the root).
     """
-    # Joint-major copies, so that each joint's frames are one contiguous block.
-    joint_rays = np.ascontiguousarray(np.swapaxes(rays, 0, 1))           # (J, T, 3)
-    joint_dz = np.ascontiguousarray(bone_dz.T)                           # (J, T)
-    xyz = np.empty(joint_rays.shape)
-    inconsistency = np.zeros(joint_dz.shape)
-    xyz[skeleton.root] = joint_rays[skeleton.root] * root_depth[:, None]
-    for joint in range(skeleton.n_joints):
-        parent = skeleton.parents[joint]
-        if parent < 0:
-            continue
-        origin = xyz[parent]
-        far, near, excess = ray_roots(origin, joint_rays[joint], bone_lengths[joint])
-        wanted = origin[:, 2] + joint_dz[joint]
-        pick_far = np.abs(far[:, 2] - wanted) <= np.abs(near[:, 2] - wanted)
-        xyz[joint] = np.where(pick_far[:, None], far, near)
-        inconsistency[joint] = excess
-    return np.swapaxes(xyz, 0, 1), inconsistency.T
+    xyz = np.empty(rays.shape)
+    inconsistency = np.zeros(bone_dz.shape)
+    _walk_rays(rays, root_depth, skeleton.root, skeleton.parents, bone_lengths, bone_dz, xyz,
+               inconsistency)
+    return xyz, inconsistency
+
+
+@kernel
+def ray_solutions(rays, t, joint, x, y, z, length):
+    """Depths of the two points of a ray at a distance from a point, and the miss.
+
+    The ray is ``joint``'s in frame ``t`` of ``rays`` ``(T, J, 3)``, the point
+    ``(x, y, z)`` and the distance ``length``, clip units. Returns ``(far, near,
+    excess)``: the depths of the two points (the ray's nearest point twice when it misses
+    the sphere) and by how much it misses (>= 0). The arithmetic of :func:`ray_roots`,
+    operation for operation, so bit for bit the same; NaN propagates as there.
+    """
+    rx, ry, rz = rays[t, joint, 0], rays[t, joint, 1], rays[t, joint, 2]
+    a = rx * rx + ry * ry + rz * rz
+    b = rx * x + ry * y + rz * z
+    nearest = b / a
+    miss_sq = x * x + y * y + z * z - b * nearest
+    if miss_sq < 0.0:
+        miss_sq = 0.0
+    reach = length * length - miss_sq
+    if reach < 0.0:
+        reach = 0.0
+    half_chord = math.sqrt(reach / a)
+    excess = math.sqrt(miss_sq) - length
+    if excess < 0.0:
+        excess = 0.0
+    return nearest + half_chord, nearest - half_chord, excess
+
+
+@kernel
+def _walk_rays(rays, root_depth, root, parents, bone_lengths, bone_dz, xyz, inconsistency):
+    """Fill ``xyz`` ``(T, J, 3)`` and ``inconsistency`` ``(T, J)``; see :func:`walk_rays`.
+
+    Joints are placed in index order, each parent before its children.
+    """
+    for t in range(rays.shape[0]):
+        for k in range(3):
+            xyz[t, root, k] = rays[t, root, k] * root_depth[t]
+        for joint in range(rays.shape[1]):
+            parent = parents[joint]
+            if parent < 0:
+                continue
+            x, y, z = xyz[t, parent, 0], xyz[t, parent, 1], xyz[t, parent, 2]
+            far, near, excess = ray_solutions(rays, t, joint, x, y, z, bone_lengths[joint])
+            wanted = z + bone_dz[t, joint]
+            depth = far if abs(rays[t, joint, 2] * far - wanted) \
+                <= abs(rays[t, joint, 2] * near - wanted) else near
+            for k in range(3):
+                xyz[t, joint, k] = rays[t, joint, k] * depth
+            inconsistency[t, joint] = excess
 
 
 def deepest_feasible_root(rays: np.ndarray, guess: np.ndarray, skeleton: Skeleton,
