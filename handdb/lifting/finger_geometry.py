@@ -18,8 +18,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from handdb.compiled import kernel
 from handdb.hand.layout import HandLayout
-from handdb.lifting.pinhole import ray_roots
+from handdb.lifting.pinhole import ray_solutions
 
 
 @dataclass(frozen=True)
@@ -71,19 +72,47 @@ def perspective_candidates(rays: np.ndarray, palm_xyz: np.ndarray, bone_lengths:
     layout
         The skeleton's palm and fingers.
     """
-    chain_rays = rays[:, None, layout.chains]                            # (T, 1, F, 3, 3)
-    lengths = bone_lengths[layout.chains]                                # (F, 3)
-    base = palm_xyz[:, :, layout.chain_bases]                            # (T, 2, F, 3)
-
-    def both(origin: np.ndarray, ray: np.ndarray, length: np.ndarray) -> np.ndarray:
-        far, near, _ = ray_roots(origin, ray, length)
-        return np.stack([far, near], axis=-2)
-
-    first = both(base, chain_rays[:, :, :, 0], lengths[:, 0])            # (T, 2, F, 2, 3)
-    second = both(first, chain_rays[:, :, :, None, 1], lengths[:, 1, None])
-    third = both(second, chain_rays[:, :, :, None, None, 2], lengths[:, 2, None, None])
-    bones = ((first - base[..., None, :])[..., :, None, None, :],
-             (second - first[..., None, :])[..., None, :],
-             third - second[..., None, :])
+    n_frames, n_fingers = len(rays), len(layout.fingers)
+    first = np.empty((n_frames, 2, n_fingers, 2, 3))
+    second = np.empty((n_frames, 2, n_fingers, 2, 2, 3))
+    third = np.empty((n_frames, 2, n_fingers, 2, 2, 2, 3))
+    vectors = (np.empty(first.shape), np.empty(second.shape), np.empty(third.shape))
+    _chain_candidates(rays, palm_xyz, layout.chains, layout.chain_bases,
+                      bone_lengths[layout.chains], first, second, third, *vectors)
+    bones = (vectors[0][..., :, None, None, :], vectors[1][..., None, :], vectors[2])
     return FingerCandidates(anchors=palm_xyz[:, :, anchor_joints(layout)], bones=bones,
                             joints=(first, second, third), palm=palm_xyz)
+
+
+@kernel
+def _chain_candidates(rays, palm_xyz, chains, chain_bases, lengths, first, second, third,
+                      first_bone, second_bone, third_bone):
+    """Fill the chain joints and the bone vectors ending at them.
+
+    ``first``, ``second``, ``third`` are :attr:`FingerCandidates.joints`, the bones the
+    same shapes; each sign axis's index 0 is the far root, 1 the near one. Clip units.
+    """
+    for t in range(rays.shape[0]):
+        for p in range(2):
+            for f in range(chains.shape[0]):
+                _place(rays, t, chains[f, 0], palm_xyz[t, p, chain_bases[f]], lengths[f, 0],
+                       first[t, p, f], first_bone[t, p, f])
+                for a in range(2):
+                    _place(rays, t, chains[f, 1], first[t, p, f, a], lengths[f, 1],
+                           second[t, p, f, a], second_bone[t, p, f, a])
+                    for b in range(2):
+                        _place(rays, t, chains[f, 2], second[t, p, f, a, b], lengths[f, 2],
+                               third[t, p, f, a, b], third_bone[t, p, f, a, b])
+
+
+@kernel
+def _place(rays, t, joint, origin, length, points, bones):
+    """Both points of ``joint``'s ray at ``length`` from ``origin`` ``(3,)``, far first.
+
+    Into ``points`` ``(2, 3)``, and the vectors from ``origin`` to them into ``bones``.
+    """
+    far, near, _ = ray_solutions(rays, t, joint, origin[0], origin[1], origin[2], length)
+    for sign, depth in enumerate((far, near)):
+        for k in range(3):
+            points[sign, k] = rays[t, joint, k] * depth
+            bones[sign, k] = points[sign, k] - origin[k]

@@ -115,23 +115,61 @@ def walk_rays(rays: np.ndarray, root_depth: np.ndarray, skeleton: Skeleton,
         ``(T, J) float64`` >= 0, clip units: how much farther than its bone length the ray
         passes from the parent (0 at the root).
     """
-    # Joint-major copies, so that each joint's frames are one contiguous block.
-    joint_rays = np.ascontiguousarray(np.swapaxes(rays, 0, 1))           # (J, T, 3)
-    joint_dz = np.ascontiguousarray(bone_dz.T)                           # (J, T)
-    xyz = np.empty(joint_rays.shape)
-    inconsistency = np.zeros(joint_dz.shape)
-    xyz[skeleton.root] = joint_rays[skeleton.root] * root_depth[:, None]
-    for joint in range(skeleton.n_joints):
-        parent = skeleton.parents[joint]
-        if parent < 0:
-            continue
-        origin = xyz[parent]
-        far, near, excess = ray_roots(origin, joint_rays[joint], bone_lengths[joint])
-        wanted = origin[:, 2] + joint_dz[joint]
-        pick_far = np.abs(far[:, 2] - wanted) <= np.abs(near[:, 2] - wanted)
-        xyz[joint] = np.where(pick_far[:, None], far, near)
-        inconsistency[joint] = excess
-    return np.swapaxes(xyz, 0, 1), inconsistency.T
+    xyz = np.empty(rays.shape)
+    inconsistency = np.zeros(bone_dz.shape)
+    _walk_rays(rays, root_depth, skeleton.root, skeleton.parents, bone_lengths, bone_dz, xyz,
+               inconsistency)
+    return xyz, inconsistency
+
+
+@kernel
+def ray_solutions(rays, t, joint, x, y, z, length):
+    """Depths of the two points of a ray at a distance from a point, and the miss.
+
+    The ray is ``joint``'s in frame ``t`` of ``rays`` ``(T, J, 3)``, the point
+    ``(x, y, z)`` and the distance ``length``, clip units. Returns ``(far, near,
+    excess)``: the depths of the two points (the ray's nearest point twice when it misses
+    the sphere) and by how much it misses (>= 0). The arithmetic of :func:`ray_roots`,
+    operation for operation, so bit for bit the same; NaN propagates as there.
+    """
+    rx, ry, rz = rays[t, joint, 0], rays[t, joint, 1], rays[t, joint, 2]
+    a = rx * rx + ry * ry + rz * rz
+    b = rx * x + ry * y + rz * z
+    nearest = b / a
+    miss_sq = x * x + y * y + z * z - b * nearest
+    if miss_sq < 0.0:
+        miss_sq = 0.0
+    reach = length * length - miss_sq
+    if reach < 0.0:
+        reach = 0.0
+    half_chord = math.sqrt(reach / a)
+    excess = math.sqrt(miss_sq) - length
+    if excess < 0.0:
+        excess = 0.0
+    return nearest + half_chord, nearest - half_chord, excess
+
+
+@kernel
+def _walk_rays(rays, root_depth, root, parents, bone_lengths, bone_dz, xyz, inconsistency):
+    """Fill ``xyz`` ``(T, J, 3)`` and ``inconsistency`` ``(T, J)``; see :func:`walk_rays`.
+
+    Joints are placed in index order, each parent before its children.
+    """
+    for t in range(rays.shape[0]):
+        for k in range(3):
+            xyz[t, root, k] = rays[t, root, k] * root_depth[t]
+        for joint in range(rays.shape[1]):
+            parent = parents[joint]
+            if parent < 0:
+                continue
+            x, y, z = xyz[t, parent, 0], xyz[t, parent, 1], xyz[t, parent, 2]
+            far, near, excess = ray_solutions(rays, t, joint, x, y, z, bone_lengths[joint])
+            wanted = z + bone_dz[t, joint]
+            depth = far if abs(rays[t, joint, 2] * far - wanted) \
+                <= abs(rays[t, joint, 2] * near - wanted) else near
+            for k in range(3):
+                xyz[t, joint, k] = rays[t, joint, k] * depth
+            inconsistency[t, joint] = excess
 
 
 def deepest_feasible_root(rays: np.ndarray, guess: np.ndarray, skeleton: Skeleton,
@@ -183,10 +221,9 @@ def _deepest_feasible(rays, root, children, first_child, bone_lengths, log_guess
     children are ``children[first_child[j]:first_child[j + 1]]``.
     """
     for t in range(len(rays)):
-        frame = rays[t]
         deepest = 0
         for g in range(len(steps) - 1, -1, -1):
-            if _fits(frame, root, log_guess[t] + steps[g], children, first_child,
+            if _fits(rays, t, root, log_guess[t] + steps[g], children, first_child,
                      bone_lengths, tolerance):
                 deepest = g
                 break
@@ -194,7 +231,7 @@ def _deepest_feasible(rays, root, children, first_child, bone_lengths, log_guess
         high = low + (steps[1] - steps[0])
         for _ in range(BISECTION_STEPS):
             middle = 0.5 * (low + high)
-            if _fits(frame, root, middle, children, first_child, bone_lengths, tolerance):
+            if _fits(rays, t, root, middle, children, first_child, bone_lengths, tolerance):
                 low = middle
             else:
                 high = middle
@@ -202,29 +239,32 @@ def _deepest_feasible(rays, root, children, first_child, bone_lengths, log_guess
 
 
 @kernel
-def _fits(rays, root, log_depth, children, first_child, bone_lengths, tolerance):
-    """Whether one frame's pose can hang from the root at depth ``exp(log_depth)``."""
+def _fits(rays, t, root, log_depth, children, first_child, bone_lengths, tolerance):
+    """Whether frame ``t``'s pose can hang from the root at depth ``exp(log_depth)``."""
     root_depth = math.exp(log_depth)
-    return _least_excess(rays, root, rays[root, 0] * root_depth, rays[root, 1] * root_depth,
-                         root_depth, children, first_child, bone_lengths,
-                         tolerance) <= tolerance
+    return _least_excess(rays, t, root, rays[t, root, 0] * root_depth,
+                         rays[t, root, 1] * root_depth, root_depth, children, first_child,
+                         bone_lengths, tolerance) <= tolerance
 
 
 @kernel
-def _least_excess(rays, joint, x, y, z, children, first_child, bone_lengths, budget):
-    """Least summed excess of the bones below ``joint`` placed at ``(x, y, z)``.
+def _least_excess(rays, t, joint, x, y, z, children, first_child, bone_lengths, budget):
+    """Least summed excess of frame ``t``'s bones below ``joint`` placed at ``(x, y, z)``.
 
     Each child lies on its ray at its bone's length from ``joint`` (near or far solution,
     whichever leaves less excess below it), or, where the ray passes too far, at the ray's
     nearest point, the miss counting as excess. NaN (a missing point) counts as none. The
     search stops as soon as the excess passes ``budget``, returning a value above it.
+    ``rays`` ``(T, J, 3)`` is indexed element by element: a view of a frame or a ray per
+    call costs this recursion three times its arithmetic.
     """
     total = 0.0
     for i in range(first_child[joint], first_child[joint + 1]):
         child = children[i]
-        ray, length = rays[child], bone_lengths[child]
-        a = ray[0] * ray[0] + ray[1] * ray[1] + ray[2] * ray[2]
-        b = ray[0] * x + ray[1] * y + ray[2] * z
+        rx, ry, rz = rays[t, child, 0], rays[t, child, 1], rays[t, child, 2]
+        length = bone_lengths[child]
+        a = rx * rx + ry * ry + rz * rz
+        b = rx * x + ry * y + rz * z
         nearest = b / a
         miss_sq = max(x * x + y * y + z * z - b * nearest, 0.0)
         excess = max(math.sqrt(miss_sq) - length, 0.0)
@@ -235,13 +275,13 @@ def _least_excess(rays, joint, x, y, z, children, first_child, bone_lengths, bud
             return total
         half_chord = math.sqrt(max(length * length - miss_sq, 0.0) / a)
         far = nearest + half_chord
-        below = _least_excess(rays, child, ray[0] * far, ray[1] * far, ray[2] * far,
-                              children, first_child, bone_lengths, budget - total)
+        below = _least_excess(rays, t, child, rx * far, ry * far, rz * far, children,
+                              first_child, bone_lengths, budget - total)
         if half_chord > 0.0 and below > 0.0:
             near = nearest - half_chord
-            below = min(below, _least_excess(rays, child, ray[0] * near, ray[1] * near,
-                                             ray[2] * near, children, first_child,
-                                             bone_lengths, min(budget - total, below)))
+            below = min(below, _least_excess(rays, t, child, rx * near, ry * near, rz * near,
+                                             children, first_child, bone_lengths,
+                                             min(budget - total, below)))
         total += below
         if total > budget:
             return total
