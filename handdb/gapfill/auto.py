@@ -92,7 +92,7 @@ VALIDATION_GAPS = 3
 def estimate_long_gaps(
     estimates: tuple[str, ...], local: np.ndarray, filled: np.ndarray,
     problems: Sequence[tuple[np.ndarray, Gaps]], skeleton: Skeleton,
-    variance: float = DEFAULT_VARIANCE,
+    variance: float = DEFAULT_VARIANCE, reach: int = 1,
 ) -> list[list[np.ndarray]]:
     """Estimate the points of long finger gaps by each of ``estimates``.
 
@@ -113,6 +113,9 @@ def estimate_long_gaps(
         problems' regressions are solved together.
     skeleton, variance
         The skeleton, the low-rank variance share.
+    reach
+        Observed frames at each edge of a gap that ``"chain"`` carries the point from
+        (:func:`~handdb.gapfill.rigid.carry_along_chains_many`), at least 1.
 
     Returns
     -------
@@ -122,7 +125,9 @@ def estimate_long_gaps(
     """
     points = [gaps.frames()[1:] for _, gaps in problems]
     chains = [carried[frame, joint] for carried, (frame, joint) in zip(
-        carry_along_chains_many(filled, problems, skeleton), points, strict=True)]
+        carry_along_chains_many(filled, problems, skeleton,
+                                [np.full(len(gaps), reach) for _, gaps in problems]),
+        points, strict=True)]
     results: list[dict[str, np.ndarray]] = [{"chain": chain} for chain in chains]
     if "regression" in estimates:
         fingers = ~palm_joints(skeleton)
@@ -226,7 +231,7 @@ def _hide_runs(hidden: np.ndarray, joint: np.ndarray, length: np.ndarray, start:
             hidden[first:stop, j] = True
 
 
-def edge_validation_mask(missing: np.ndarray, gaps: Gaps) -> np.ndarray:
+def edge_validation_mask(missing: np.ndarray, gaps: Gaps, bridged: int = 0) -> np.ndarray:
     """Hide, beside each leading or trailing gap, the observed frames next to it.
 
     A trailing gap of ``L`` frames is extrapolated ``L`` frames past the joint's last
@@ -236,12 +241,20 @@ def edge_validation_mask(missing: np.ndarray, gaps: Gaps) -> np.ndarray:
     leading and a trailing gap is split at its middle frame, which stays observed, each
     trial hiding frames on its own side only. Whole-clip gaps get no run.
 
+    Interior gaps of at most ``bridged`` frames (a detector's short dropouts, which the
+    fill bridges by interpolation) do not end the run: the trial hides the observed frames
+    on both sides of them, and so extrapolates as far as the real gap does. Were the run
+    cut at the dropout, a dropout just before a 48-frame trailing gap would leave a trial
+    of a few frames, which weighs the estimates by how they extrapolate a few frames.
+
     Parameters
     ----------
     missing
         ``(T, J) bool``.
     gaps
         The gaps to be filled (of ``missing``).
+    bridged
+        Longest interior gap, frames, that a trial's run reaches across.
 
     Returns
     -------
@@ -256,7 +269,8 @@ def edge_validation_mask(missing: np.ndarray, gaps: Gaps) -> np.ndarray:
     everything = find_gaps(missing)
     for joint, start, stop, leading in zip(edges.joint, edges.start, edges.stop,
                                            edges.leading, strict=True):
-        own = everything.select(everything.joint == joint)
+        own = everything.select((everything.joint == joint)
+                                & ~(everything.interior & (everything.length <= bridged)))
         length = stop - start
         if leading:
             later = own.start > stop
@@ -272,10 +286,11 @@ def edge_validation_mask(missing: np.ndarray, gaps: Gaps) -> np.ndarray:
             shared = earlier.any() and own.start[earlier][-1] == 0
             kept = first + (start - first) // 2 if shared else first
             hidden[max(start - length, kept + 1):start, joint] = True
-    return hidden
+    return hidden & ~missing
 
 
-def validation_trials(missing: np.ndarray, gaps: Gaps) -> tuple[np.ndarray, np.ndarray, Gaps]:
+def validation_trials(missing: np.ndarray, gaps: Gaps, bridged: int = 0
+                      ) -> tuple[np.ndarray, np.ndarray, Gaps]:
     """The trials that weigh estimates of ``gaps``: observed runs hidden on purpose.
 
     Parameters
@@ -284,6 +299,9 @@ def validation_trials(missing: np.ndarray, gaps: Gaps) -> tuple[np.ndarray, np.n
         ``(T, J) bool``.
     gaps
         The gaps to be filled (of ``missing``).
+    bridged
+        Longest interior gap, frames, that an edge trial reaches across
+        (:func:`edge_validation_mask`).
 
     Returns
     -------
@@ -296,7 +314,7 @@ def validation_trials(missing: np.ndarray, gaps: Gaps) -> tuple[np.ndarray, np.n
         The gaps of ``trial_missing`` holding a hidden point (a hidden run, or one merged
         with the real gap beside it), to be scored on their hidden points only.
     """
-    hidden = validation_mask(missing, gaps) | edge_validation_mask(missing, gaps)
+    hidden = validation_mask(missing, gaps) | edge_validation_mask(missing, gaps, bridged)
     trial_missing = missing | hidden
     trial_gaps = find_gaps(trial_missing)
     hidden_so_far = np.concatenate([np.zeros((1, missing.shape[1]), dtype=np.int64),
@@ -340,18 +358,18 @@ def validation_weights(trials: Sequence[np.ndarray], truth: np.ndarray, hidden: 
 
 def _long_gap_fill(
     local: np.ndarray, filled: np.ndarray, missing: np.ndarray, gaps: Gaps,
-    skeleton: Skeleton, rule: str, variance: float,
+    skeleton: Skeleton, rule: str, variance: float, short_gap: int, reach: int,
 ) -> np.ndarray:
     _, frame, joint = gaps.frames()
     blended = filled.copy()
     if rule != "validated":
         blended[frame, joint] = estimate_long_gaps((rule,), local, filled, [(missing, gaps)],
-                                                   skeleton, variance)[0][0]
+                                                   skeleton, variance, reach)[0][0]
         return blended
-    hidden, trial_missing, trial_gaps = validation_trials(missing, gaps)
+    hidden, trial_missing, trial_gaps = validation_trials(missing, gaps, short_gap)
     trials, estimates = estimate_long_gaps(VALIDATED_ESTIMATES, local, filled,
                                            [(trial_missing, trial_gaps), (missing, gaps)],
-                                           skeleton, variance)
+                                           skeleton, variance, reach)
     weights = validation_weights(trials, local, hidden, trial_gaps)
     blended[frame, joint] = np.sum(weights[:, joint, None] * np.stack(estimates), axis=0)
     return blended
@@ -493,6 +511,7 @@ def fill_auto(
     bone_lengths: dict[str, float] | None = None,
     scale: float | np.ndarray | None = None,
     smooth: bool = True,
+    average_edges: bool = False,
 ) -> MethodOutput:
     """Fill every gap with the rule that suits it (see the module docstring).
 
@@ -513,6 +532,13 @@ def fill_auto(
         Fill from the observed tracks smoothed against detector jitter
         (:func:`~handdb.denoise.denoise`; the observed points are returned as they
         were), or from the tracks as observed.
+    average_edges
+        Carry a long finger gap's ``"chain"`` estimate from the mean of the point over the
+        frames beside each edge that the smoothing's half-window spans (each carried to
+        the edge frame; :func:`~handdb.gapfill.rigid.carry_along_chains_many`), rather
+        than from the edge frame alone. Without smoothing it changes nothing. Not the
+        default: it helps some clips with detector noise and harms others
+        (``benchmarks/RESULTS-gapfill.md``).
 
     Raises
     ------
@@ -534,7 +560,7 @@ def fill_auto(
         part = _fill_track(uv[start:stop], missing[start:stop], skeleton, short_gap=short_gap,
                            long_gaps=long_gaps, variance=variance, bone_lengths=bone_lengths,
                            scale=scale[start:stop] if isinstance(scale, np.ndarray) else scale,
-                           smooth=smooth)
+                           smooth=smooth, average_edges=average_edges)
         filled[start:stop], labels[start:stop] = part.uv, part.labels
     return MethodOutput(filled, labels=labels)
 
@@ -542,7 +568,7 @@ def fill_auto(
 def _fill_track(
     uv: np.ndarray, missing: np.ndarray, skeleton: Skeleton, *, short_gap: int,
     long_gaps: str, variance: float, bone_lengths: dict[str, float] | None,
-    scale: float | np.ndarray | None, smooth: bool,
+    scale: float | np.ndarray | None, smooth: bool, average_edges: bool,
 ) -> MethodOutput:
     """Fill one segment of :func:`track_segments` (the parameters of :func:`fill_auto`).
 
@@ -551,7 +577,7 @@ def _fill_track(
     """
     gaps = find_gaps(missing)
     never_seen = np.unique(gaps.joint[gaps.whole_clip])
-    smoothed = denoise(uv, missing)[0] if smooth else uv
+    smoothed, half = denoise(uv, missing) if smooth else (uv, 0)
     placed = (place_from_rest_pose(smoothed, missing, skeleton, never_seen) if never_seen.size
               else smoothed)
     placed, on_chords = place_on_chords(placed, missing, skeleton, never_seen)
@@ -567,7 +593,8 @@ def _fill_track(
     filled_local = interpolate_gaps(local, unknown, "pchip")
     if by_model.any():
         filled_local = _long_gap_fill(local, filled_local, unknown, gaps.select(by_model),
-                                      skeleton, long_gaps, variance)
+                                      skeleton, long_gaps, variance, short_gap,
+                                      half + 1 if average_edges else 1)
     filled = np.where(missing[..., None], placed, uv)
     frame, joint = mask_points(unknown)
     filled[frame, joint] = (filled_local[frame, joint] if motion is None
