@@ -15,11 +15,13 @@
 4. Finger points in longer, leading or trailing gaps: two estimates from the other joints,
    the point carried with its parent bone (:func:`~handdb.gapfill.rigid.carry_along_chains`,
    the joint's angle changing linearly across the gap) and a ridge regression on the finger
-   joints seen throughout the gap (:mod:`handdb.gapfill.regression`), are weighed per joint
+   joints seen throughout the gap (:mod:`handdb.gapfill.regression`; a joint's dropouts no
+   longer than the smoothing's half-width are read as interpolated, so a detector's
+   dropout of a frame or two does not remove a predictor), are weighed per joint
    by how well each refills runs of that joint's own observed frames hidden on purpose
    (:func:`validation_mask` and, beside a leading or trailing gap,
    :func:`edge_validation_mask`, which hides the frames next to the gap so that the trial
-   extrapolates as far as the gap does): weights inversely proportional to the squared
+   extrapolates as far as the gap does, across short dropouts): weights inversely proportional to the squared
    validation error. ``long_gaps`` picks one estimate instead (``"chain"``,
    ``"regression"``, or ``"lowrank"``, the iterated PCA of :mod:`handdb.gapfill.lowrank`).
 5. Joints never observed are placed first, so that the other joints can lean on them:
@@ -92,7 +94,7 @@ VALIDATION_GAPS = 3
 def estimate_long_gaps(
     estimates: tuple[str, ...], local: np.ndarray, filled: np.ndarray,
     problems: Sequence[tuple[np.ndarray, Gaps]], skeleton: Skeleton,
-    variance: float = DEFAULT_VARIANCE, reach: int = 1,
+    variance: float = DEFAULT_VARIANCE, reach: int = 1, bridged: int = 0,
 ) -> list[list[np.ndarray]]:
     """Estimate the points of long finger gaps by each of ``estimates``.
 
@@ -116,6 +118,10 @@ def estimate_long_gaps(
     reach
         Observed frames at each edge of a gap that ``"chain"`` carries the point from
         (:func:`~handdb.gapfill.rigid.carry_along_chains_many`), at least 1.
+    bridged
+        Longest interior gap, frames, across which ``"regression"`` reads a joint from
+        ``filled`` as if observed (:func:`_unbridged`): a predictor seen throughout a gap
+        but for a dropout of a frame or two still predicts, and those frames train.
 
     Returns
     -------
@@ -131,9 +137,10 @@ def estimate_long_gaps(
     results: list[dict[str, np.ndarray]] = [{"chain": chain} for chain in chains]
     if "regression" in estimates:
         fingers = ~palm_joints(skeleton)
-        missing_in_all = np.logical_and.reduce([missing for missing, _ in problems])
+        read = [(_unbridged(missing, gaps, bridged), gaps) for missing, gaps in problems]
+        missing_in_all = np.logical_and.reduce([missing for missing, _ in read])
         samples = regression_samples(filled, missing_in_all, np.flatnonzero(fingers))
-        regressed = regression_estimates(samples, fingers, problems)
+        regressed = regression_estimates(samples, fingers, read)
         for result, chain, estimate in zip(results, chains, regressed, strict=True):
             result["regression"] = np.where(np.isnan(estimate), chain, estimate)
     if "lowrank" in estimates:
@@ -142,6 +149,37 @@ def estimate_long_gaps(
             model = lowrank_reconstruct(local, missing, variance=variance)
             result["lowrank"] = blend_to_edges(filled, model, gaps)[frame, joint]
     return [[result[name] for name in estimates] for result in results]
+
+
+def _unbridged(missing: np.ndarray, gaps: Gaps, bridged: int) -> np.ndarray:
+    """``missing`` without the points of its interior gaps of at most ``bridged`` frames.
+
+    Parameters
+    ----------
+    missing
+        ``(T, J) bool``.
+    gaps
+        The gaps to estimate (of ``missing``): their points stay missing.
+    bridged
+        Longest interior gap taken as observed, frames; 0 for none.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(T, J) bool``: ``missing`` itself when nothing is bridged, else a copy.
+    """
+    if bridged <= 0:
+        return missing
+    every = find_gaps(missing)
+    short = every.select(every.interior & (every.length <= bridged))
+    if not len(short):
+        return missing
+    unbridged = missing.copy()
+    _, frame, joint = short.frames()
+    unbridged[frame, joint] = False
+    _, frame, joint = gaps.frames()
+    unbridged[frame, joint] = True
+    return unbridged
 
 
 def validation_mask(missing: np.ndarray, gaps: Gaps, seed: int = 0) -> np.ndarray:
@@ -359,17 +397,19 @@ def validation_weights(trials: Sequence[np.ndarray], truth: np.ndarray, hidden: 
 def _long_gap_fill(
     local: np.ndarray, filled: np.ndarray, missing: np.ndarray, gaps: Gaps,
     skeleton: Skeleton, rule: str, variance: float, short_gap: int, reach: int,
+    bridged: int,
 ) -> np.ndarray:
     _, frame, joint = gaps.frames()
     blended = filled.copy()
     if rule != "validated":
         blended[frame, joint] = estimate_long_gaps((rule,), local, filled, [(missing, gaps)],
-                                                   skeleton, variance, reach)[0][0]
+                                                   skeleton, variance, reach,
+                                                   bridged)[0][0]
         return blended
     hidden, trial_missing, trial_gaps = validation_trials(missing, gaps, short_gap)
     trials, estimates = estimate_long_gaps(VALIDATED_ESTIMATES, local, filled,
                                            [(trial_missing, trial_gaps), (missing, gaps)],
-                                           skeleton, variance, reach)
+                                           skeleton, variance, reach, bridged)
     weights = validation_weights(trials, local, hidden, trial_gaps)
     blended[frame, joint] = np.sum(weights[:, joint, None] * np.stack(estimates), axis=0)
     return blended
@@ -594,7 +634,11 @@ def _fill_track(
     if by_model.any():
         filled_local = _long_gap_fill(local, filled_local, unknown, gaps.select(by_model),
                                       skeleton, long_gaps, variance, short_gap,
-                                      half + 1 if average_edges else 1)
+                                      half + 1 if average_edges else 1,
+                                      # A gap no longer than the smoothing's half-width is
+                                      # interpolated within the span over which Stein's
+                                      # risk found the motion smooth: as good as observed.
+                                      half)
     filled = np.where(missing[..., None], placed, uv)
     frame, joint = mask_points(unknown)
     filled[frame, joint] = (filled_local[frame, joint] if motion is None

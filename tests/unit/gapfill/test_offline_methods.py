@@ -7,6 +7,7 @@ from handdb.gapfill.auto import (
     SHORT_GAP,
     VALIDATION_GAPS,
     edge_validation_mask,
+    estimate_long_gaps,
     validation_mask,
 )
 from handdb.gapfill.gaps import find_gaps
@@ -268,6 +269,33 @@ def test_chain_fill_from_averaged_edges_holds_less_of_the_edge_noise(mediapipe):
         - uv)[trailing:, tips] ** 2)) for reach in (1, 9)]
     # the tips are noisy, their carriers exact: the mean of 9 frames holds a third of it
     assert errors[1] < 0.5 * errors[0]
+
+
+def test_regression_keeps_a_predictor_across_a_dropout_within_the_gap(mediapipe):
+    n_frames = 200
+    t = np.linspace(0.0, 4.0 * np.pi, n_frames)[:, None, None]
+    rng = np.random.default_rng(3)
+    phase, size = rng.uniform(0, 2 * np.pi, (2, 1, 21, 2))
+    uv = 100.0 + 30.0 * rng.uniform(0.5, 1.5, (1, 21, 2)) * np.sin(t * (1 + size) + phase)
+    tip, predictor = mediapipe.index("index_tip"), mediapipe.index("middle_tip")
+    uv[:, tip] = uv[:, predictor] @ np.array([[0.8, -0.3], [0.4, 1.1]]) + 20.0
+    fingers = np.flatnonzero(~palm_joints(mediapipe))
+    missing = np.zeros((n_frames, mediapipe.n_joints), dtype=bool)
+    missing[80:130, tip] = True
+    for k, joint in enumerate(j for j in fingers if j != tip):
+        missing[85 + 2 * k, joint] = True          # every finger predictor drops a frame
+    gaps = find_gaps(missing).select(find_gaps(missing).joint == tip)
+    filled = interpolate_gaps(np.where(missing[..., None], np.nan, uv), missing, "pchip")
+    truth = uv[80:130, tip]
+    kept, = estimate_long_gaps(("regression",), uv, filled, [(missing, gaps)], mediapipe,
+                               bridged=1)[0]
+    dropped, = estimate_long_gaps(("regression",), uv, filled, [(missing, gaps)],
+                                  mediapipe)[0]
+    errors = [np.sqrt(np.mean(np.sum((estimate - truth) ** 2, axis=-1)))
+              for estimate in (kept, dropped)]
+    # kept: the tip follows its predictor (the other predictors' dropped frames are
+    # interpolated); dropped: no predictor seen throughout, the chain's estimate
+    assert errors[0] < 2.0 and errors[1] > 10 * errors[0]
 
 
 def _refine_bone_by_bone(uv, missing, skeleton, bounds):
