@@ -75,7 +75,7 @@ __getattr__ = lazy_attributes(__name__, dict.fromkeys(
 
 #: Version of gap filling. Raise it when a change alters the output; it
 #: enters the build keys (:mod:`handdb.build.keys`), a docstring edit or a speed-up does not.
-VERSION = 5
+VERSION = 7
 
 __all__ = [
     "DEFAULT_METHOD",

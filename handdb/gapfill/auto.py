@@ -15,11 +15,13 @@
 4. Finger points in longer, leading or trailing gaps: two estimates from the other joints,
    the point carried with its parent bone (:func:`~handdb.gapfill.rigid.carry_along_chains`,
    the joint's angle changing linearly across the gap) and a ridge regression on the finger
-   joints seen throughout the gap (:mod:`handdb.gapfill.regression`), are weighed per joint
+   joints seen throughout the gap (:mod:`handdb.gapfill.regression`; a joint's dropouts no
+   longer than the smoothing's half-width are read as interpolated, so a detector's
+   dropout of a frame or two does not remove a predictor), are weighed per joint
    by how well each refills runs of that joint's own observed frames hidden on purpose
    (:func:`validation_mask` and, beside a leading or trailing gap,
    :func:`edge_validation_mask`, which hides the frames next to the gap so that the trial
-   extrapolates as far as the gap does): weights inversely proportional to the squared
+   extrapolates as far as the gap does, across short dropouts): weights inversely proportional to the squared
    validation error. ``long_gaps`` picks one estimate instead (``"chain"``,
    ``"regression"``, or ``"lowrank"``, the iterated PCA of :mod:`handdb.gapfill.lowrank`).
 5. Joints never observed are placed first, so that the other joints can lean on them:
@@ -92,7 +94,7 @@ VALIDATION_GAPS = 3
 def estimate_long_gaps(
     estimates: tuple[str, ...], local: np.ndarray, filled: np.ndarray,
     problems: Sequence[tuple[np.ndarray, Gaps]], skeleton: Skeleton,
-    variance: float = DEFAULT_VARIANCE,
+    variance: float = DEFAULT_VARIANCE, reach: int = 1, bridged: int = 0,
 ) -> list[list[np.ndarray]]:
     """Estimate the points of long finger gaps by each of ``estimates``.
 
@@ -113,6 +115,13 @@ def estimate_long_gaps(
         problems' regressions are solved together.
     skeleton, variance
         The skeleton, the low-rank variance share.
+    reach
+        Observed frames at each edge of a gap that ``"chain"`` carries the point from
+        (:func:`~handdb.gapfill.rigid.carry_along_chains_many`), at least 1.
+    bridged
+        Longest interior gap, frames, across which ``"regression"`` reads a joint from
+        ``filled`` as if observed (:func:`_unbridged`): a predictor seen throughout a gap
+        but for a dropout of a frame or two still predicts, and those frames train.
 
     Returns
     -------
@@ -122,13 +131,16 @@ def estimate_long_gaps(
     """
     points = [gaps.frames()[1:] for _, gaps in problems]
     chains = [carried[frame, joint] for carried, (frame, joint) in zip(
-        carry_along_chains_many(filled, problems, skeleton), points, strict=True)]
+        carry_along_chains_many(filled, problems, skeleton,
+                                [np.full(len(gaps), reach) for _, gaps in problems]),
+        points, strict=True)]
     results: list[dict[str, np.ndarray]] = [{"chain": chain} for chain in chains]
     if "regression" in estimates:
         fingers = ~palm_joints(skeleton)
-        missing_in_all = np.logical_and.reduce([missing for missing, _ in problems])
+        read = [(_unbridged(missing, gaps, bridged), gaps) for missing, gaps in problems]
+        missing_in_all = np.logical_and.reduce([missing for missing, _ in read])
         samples = regression_samples(filled, missing_in_all, np.flatnonzero(fingers))
-        regressed = regression_estimates(samples, fingers, problems)
+        regressed = regression_estimates(samples, fingers, read)
         for result, chain, estimate in zip(results, chains, regressed, strict=True):
             result["regression"] = np.where(np.isnan(estimate), chain, estimate)
     if "lowrank" in estimates:
@@ -137,6 +149,37 @@ def estimate_long_gaps(
             model = lowrank_reconstruct(local, missing, variance=variance)
             result["lowrank"] = blend_to_edges(filled, model, gaps)[frame, joint]
     return [[result[name] for name in estimates] for result in results]
+
+
+def _unbridged(missing: np.ndarray, gaps: Gaps, bridged: int) -> np.ndarray:
+    """``missing`` without the points of its interior gaps of at most ``bridged`` frames.
+
+    Parameters
+    ----------
+    missing
+        ``(T, J) bool``.
+    gaps
+        The gaps to estimate (of ``missing``): their points stay missing.
+    bridged
+        Longest interior gap taken as observed, frames; 0 for none.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(T, J) bool``: ``missing`` itself when nothing is bridged, else a copy.
+    """
+    if bridged <= 0:
+        return missing
+    every = find_gaps(missing)
+    short = every.select(every.interior & (every.length <= bridged))
+    if not len(short):
+        return missing
+    unbridged = missing.copy()
+    _, frame, joint = short.frames()
+    unbridged[frame, joint] = False
+    _, frame, joint = gaps.frames()
+    unbridged[frame, joint] = True
+    return unbridged
 
 
 def validation_mask(missing: np.ndarray, gaps: Gaps, seed: int = 0) -> np.ndarray:
@@ -226,7 +269,7 @@ def _hide_runs(hidden: np.ndarray, joint: np.ndarray, length: np.ndarray, start:
             hidden[first:stop, j] = True
 
 
-def edge_validation_mask(missing: np.ndarray, gaps: Gaps) -> np.ndarray:
+def edge_validation_mask(missing: np.ndarray, gaps: Gaps, bridged: int = 0) -> np.ndarray:
     """Hide, beside each leading or trailing gap, the observed frames next to it.
 
     A trailing gap of ``L`` frames is extrapolated ``L`` frames past the joint's last
@@ -236,12 +279,20 @@ def edge_validation_mask(missing: np.ndarray, gaps: Gaps) -> np.ndarray:
     leading and a trailing gap is split at its middle frame, which stays observed, each
     trial hiding frames on its own side only. Whole-clip gaps get no run.
 
+    Interior gaps of at most ``bridged`` frames (a detector's short dropouts, which the
+    fill bridges by interpolation) do not end the run: the trial hides the observed frames
+    on both sides of them, and so extrapolates as far as the real gap does. Were the run
+    cut at the dropout, a dropout just before a 48-frame trailing gap would leave a trial
+    of a few frames, which weighs the estimates by how they extrapolate a few frames.
+
     Parameters
     ----------
     missing
         ``(T, J) bool``.
     gaps
         The gaps to be filled (of ``missing``).
+    bridged
+        Longest interior gap, frames, that a trial's run reaches across.
 
     Returns
     -------
@@ -256,7 +307,8 @@ def edge_validation_mask(missing: np.ndarray, gaps: Gaps) -> np.ndarray:
     everything = find_gaps(missing)
     for joint, start, stop, leading in zip(edges.joint, edges.start, edges.stop,
                                            edges.leading, strict=True):
-        own = everything.select(everything.joint == joint)
+        own = everything.select((everything.joint == joint)
+                                & ~(everything.interior & (everything.length <= bridged)))
         length = stop - start
         if leading:
             later = own.start > stop
@@ -272,10 +324,11 @@ def edge_validation_mask(missing: np.ndarray, gaps: Gaps) -> np.ndarray:
             shared = earlier.any() and own.start[earlier][-1] == 0
             kept = first + (start - first) // 2 if shared else first
             hidden[max(start - length, kept + 1):start, joint] = True
-    return hidden
+    return hidden & ~missing
 
 
-def validation_trials(missing: np.ndarray, gaps: Gaps) -> tuple[np.ndarray, np.ndarray, Gaps]:
+def validation_trials(missing: np.ndarray, gaps: Gaps, bridged: int = 0
+                      ) -> tuple[np.ndarray, np.ndarray, Gaps]:
     """The trials that weigh estimates of ``gaps``: observed runs hidden on purpose.
 
     Parameters
@@ -284,6 +337,9 @@ def validation_trials(missing: np.ndarray, gaps: Gaps) -> tuple[np.ndarray, np.n
         ``(T, J) bool``.
     gaps
         The gaps to be filled (of ``missing``).
+    bridged
+        Longest interior gap, frames, that an edge trial reaches across
+        (:func:`edge_validation_mask`).
 
     Returns
     -------
@@ -296,7 +352,7 @@ def validation_trials(missing: np.ndarray, gaps: Gaps) -> tuple[np.ndarray, np.n
         The gaps of ``trial_missing`` holding a hidden point (a hidden run, or one merged
         with the real gap beside it), to be scored on their hidden points only.
     """
-    hidden = validation_mask(missing, gaps) | edge_validation_mask(missing, gaps)
+    hidden = validation_mask(missing, gaps) | edge_validation_mask(missing, gaps, bridged)
     trial_missing = missing | hidden
     trial_gaps = find_gaps(trial_missing)
     hidden_so_far = np.concatenate([np.zeros((1, missing.shape[1]), dtype=np.int64),
@@ -340,18 +396,20 @@ def validation_weights(trials: Sequence[np.ndarray], truth: np.ndarray, hidden: 
 
 def _long_gap_fill(
     local: np.ndarray, filled: np.ndarray, missing: np.ndarray, gaps: Gaps,
-    skeleton: Skeleton, rule: str, variance: float,
+    skeleton: Skeleton, rule: str, variance: float, short_gap: int, reach: int,
+    bridged: int,
 ) -> np.ndarray:
     _, frame, joint = gaps.frames()
     blended = filled.copy()
     if rule != "validated":
         blended[frame, joint] = estimate_long_gaps((rule,), local, filled, [(missing, gaps)],
-                                                   skeleton, variance)[0][0]
+                                                   skeleton, variance, reach,
+                                                   bridged)[0][0]
         return blended
-    hidden, trial_missing, trial_gaps = validation_trials(missing, gaps)
+    hidden, trial_missing, trial_gaps = validation_trials(missing, gaps, short_gap)
     trials, estimates = estimate_long_gaps(VALIDATED_ESTIMATES, local, filled,
                                            [(trial_missing, trial_gaps), (missing, gaps)],
-                                           skeleton, variance)
+                                           skeleton, variance, reach, bridged)
     weights = validation_weights(trials, local, hidden, trial_gaps)
     blended[frame, joint] = np.sum(weights[:, joint, None] * np.stack(estimates), axis=0)
     return blended
@@ -493,6 +551,7 @@ def fill_auto(
     bone_lengths: dict[str, float] | None = None,
     scale: float | np.ndarray | None = None,
     smooth: bool = True,
+    average_edges: bool = False,
 ) -> MethodOutput:
     """Fill every gap with the rule that suits it (see the module docstring).
 
@@ -513,6 +572,13 @@ def fill_auto(
         Fill from the observed tracks smoothed against detector jitter
         (:func:`~handdb.denoise.denoise`; the observed points are returned as they
         were), or from the tracks as observed.
+    average_edges
+        Carry a long finger gap's ``"chain"`` estimate from the mean of the point over the
+        frames beside each edge that the smoothing's half-window spans (each carried to
+        the edge frame; :func:`~handdb.gapfill.rigid.carry_along_chains_many`), rather
+        than from the edge frame alone. Without smoothing it changes nothing. Not the
+        default: it helps some clips with detector noise and harms others
+        (``benchmarks/RESULTS-gapfill.md``).
 
     Raises
     ------
@@ -534,7 +600,7 @@ def fill_auto(
         part = _fill_track(uv[start:stop], missing[start:stop], skeleton, short_gap=short_gap,
                            long_gaps=long_gaps, variance=variance, bone_lengths=bone_lengths,
                            scale=scale[start:stop] if isinstance(scale, np.ndarray) else scale,
-                           smooth=smooth)
+                           smooth=smooth, average_edges=average_edges)
         filled[start:stop], labels[start:stop] = part.uv, part.labels
     return MethodOutput(filled, labels=labels)
 
@@ -542,7 +608,7 @@ def fill_auto(
 def _fill_track(
     uv: np.ndarray, missing: np.ndarray, skeleton: Skeleton, *, short_gap: int,
     long_gaps: str, variance: float, bone_lengths: dict[str, float] | None,
-    scale: float | np.ndarray | None, smooth: bool,
+    scale: float | np.ndarray | None, smooth: bool, average_edges: bool,
 ) -> MethodOutput:
     """Fill one segment of :func:`track_segments` (the parameters of :func:`fill_auto`).
 
@@ -551,7 +617,7 @@ def _fill_track(
     """
     gaps = find_gaps(missing)
     never_seen = np.unique(gaps.joint[gaps.whole_clip])
-    smoothed = denoise(uv, missing)[0] if smooth else uv
+    smoothed, half = denoise(uv, missing) if smooth else (uv, 0)
     placed = (place_from_rest_pose(smoothed, missing, skeleton, never_seen) if never_seen.size
               else smoothed)
     placed, on_chords = place_on_chords(placed, missing, skeleton, never_seen)
@@ -567,7 +633,12 @@ def _fill_track(
     filled_local = interpolate_gaps(local, unknown, "pchip")
     if by_model.any():
         filled_local = _long_gap_fill(local, filled_local, unknown, gaps.select(by_model),
-                                      skeleton, long_gaps, variance)
+                                      skeleton, long_gaps, variance, short_gap,
+                                      half + 1 if average_edges else 1,
+                                      # A gap no longer than the smoothing's half-width is
+                                      # interpolated within the span over which Stein's
+                                      # risk found the motion smooth: as good as observed.
+                                      half)
     filled = np.where(missing[..., None], placed, uv)
     frame, joint = mask_points(unknown)
     filled[frame, joint] = (filled_local[frame, joint] if motion is None

@@ -29,6 +29,10 @@ PALM_ROLES = frozenset({"wrist", "palm_fold", "palm_center", "cmc", "mcp"})
 #: Fewest palm points a frame needs before the rest pose is fitted to them alone.
 MIN_PALM_POINTS = 3
 
+#: Smallest area scale of a carry weighed in the mean of :func:`_edge_point` (guards the
+#: inverse of a degenerate map).
+MIN_AREA_SCALE = 1e-12
+
 
 def palm_joints(skeleton: Skeleton) -> np.ndarray:
     """``(J,) bool``: joints that move with the palm (wrist, palm points, finger bases).
@@ -319,11 +323,21 @@ def carry_along_chains(
 
 
 def carry_along_chains_many(
-    uv: np.ndarray, problems: Sequence[tuple[np.ndarray, Gaps]], skeleton: Skeleton
+    uv: np.ndarray, problems: Sequence[tuple[np.ndarray, Gaps]], skeleton: Skeleton,
+    reach: Sequence[np.ndarray] | None = None,
 ) -> list[np.ndarray]:
     """:func:`carry_along_chains` for several ``(missing, gaps)`` problems on one clip.
 
     Each problem fills its own copy of ``uv`` (:func:`_carry_chains`, compiled).
+
+    Parameters
+    ----------
+    uv, problems, skeleton
+        As for :func:`carry_along_chains`, one ``(missing, gaps)`` pair per problem.
+    reach
+        Per problem, ``(G,) int64``: how many observed frames at each edge of each gap the
+        point is carried from (:func:`_carry_chains`); 1 (the edge frame alone) if not
+        given.
 
     Returns
     -------
@@ -333,17 +347,19 @@ def carry_along_chains_many(
     carriers = parent_bones(skeleton)
     depth = skeleton.depth()
     filled = []
-    for _, gaps in problems:
+    for index, (missing, gaps) in enumerate(problems):
+        frames = (np.ones(len(gaps), dtype=np.int64) if reach is None
+                  else np.asarray(reach[index], dtype=np.int64))
         filled.append(uv.copy())
-        _carry_chains(filled[-1], gaps.joint, gaps.start, gaps.stop, depth[gaps.joint],
-                      carriers)
+        _carry_chains(filled[-1], ~missing, gaps.joint, gaps.start, gaps.stop,
+                      depth[gaps.joint], frames, carriers)
     return filled
 
 
 @kernel
 def _carry_chains(
-    state: np.ndarray, joint: np.ndarray, start: np.ndarray, stop: np.ndarray,
-    depth: np.ndarray, carriers: np.ndarray,
+    state: np.ndarray, observed: np.ndarray, joint: np.ndarray, start: np.ndarray,
+    stop: np.ndarray, depth: np.ndarray, reach: np.ndarray, carriers: np.ndarray,
 ) -> None:
     """Fill gaps in place, a depth at a time, carrying each point with its carriers.
 
@@ -352,10 +368,15 @@ def _carry_chains(
     state
         ``(T, J, 2) float64``, pixels: the tracks, every point outside the gaps filled;
         the gaps' points are written.
+    observed
+        ``(T, J) bool``: the points observed (a gap's point is carried only from those).
     joint, start, stop
         ``(G,) int64``: the gaps (as :class:`~handdb.gapfill.gaps.Gaps`), none whole-clip.
     depth
         ``(G,) int64``: the depth of each gap's joint; shallower gaps are filled first.
+    reach
+        ``(G,) int64``: the observed frames at each edge of each gap the point is carried
+        from, at least 1.
     carriers
         ``(J, J) bool``: row ``j``, the joints that carry joint ``j`` (:func:`parent_bones`).
 
@@ -364,7 +385,10 @@ def _carry_chains(
     Each point is carried from the frame before its gap and from the frame after it by
     the similarity fitted to its carriers seen (not in a gap still to fill) in both frames
     (:func:`_carry_point`), and the two are blended linearly across the gap; a leading
-    gap takes the estimate from after it, a trailing gap the one from before it.
+    gap takes the estimate from after it, a trailing gap the one from before it. The point
+    carried from an edge frame is the mean of the point in the ``reach`` observed frames
+    of the run beside the gap, each carried to the edge frame: detector noise in one edge
+    sample would be held across the whole gap, the mean of several carries less of it.
     """
     n_frames = state.shape[0]
     unresolved = np.zeros(state.shape[:2], dtype=np.bool_)
@@ -385,11 +409,15 @@ def _carry_chains(
         values = np.empty((level.size, longest, 2))
         for index, g in enumerate(level):
             before, after = max(start[g] - 1, 0), min(stop[g], n_frames - 1)
+            bx, by = _edge_point(state, observed, unresolved, carriers[joint[g]], joint[g],
+                                 before, -1, reach[g], weights)
+            ax, ay = _edge_point(state, observed, unresolved, carriers[joint[g]], joint[g],
+                                 after, 1, reach[g], weights)
             for frame in range(start[g], stop[g]):
                 x0, y0 = _carry_point(state, unresolved, carriers[joint[g]], joint[g],
-                                      before, frame, weights)
+                                      before, frame, weights, bx, by)
                 x1, y1 = _carry_point(state, unresolved, carriers[joint[g]], joint[g],
-                                      after, frame, weights)
+                                      after, frame, weights, ax, ay)
                 share = (frame - before) / max(after - before, 1)
                 if start[g] == 0:
                     carried[frame] = x1, y1
@@ -406,15 +434,82 @@ def _carry_chains(
 
 
 @kernel
-def _carry_point(
+def _edge_point(
+    state: np.ndarray, observed: np.ndarray, unresolved: np.ndarray, carrier: np.ndarray,
+    joint: int, edge: int, step: int, reach: int, weights: np.ndarray,
+) -> tuple[float, float]:
+    """The joint's point at a gap's edge frame, from up to ``reach`` frames of its run.
+
+    The frames ``edge, edge + step, ...`` where the joint is observed, up to ``reach`` of
+    them and not past the run, are each carried to ``edge`` (:func:`_carry_point`) and
+    averaged.
+
+    Parameters
+    ----------
+    state, observed, unresolved, carrier, joint, weights
+        As for :func:`_carry_chains` and :func:`_carry_point`.
+    edge
+        The frame next to the gap.
+    step
+        -1 to read the frames before ``edge``, 1 the frames after it.
+    reach
+        Most frames averaged, at least 1.
+
+    Returns
+    -------
+    x, y
+        Pixels; the point at ``edge`` when it is not observed or ``reach`` is 1.
+    """
+    x, y = state[edge, joint, 0], state[edge, joint, 1]
+    if reach <= 1 or not observed[edge, joint]:
+        return x, y
+    n_frames = state.shape[0]
+    total, count = 1.0, 1
+    frame = edge + step
+    while count < reach and 0 <= frame < n_frames and observed[frame, joint]:
+        (a, b, c, d, offset_x, offset_y), kind = _carrier_map(
+            state, unresolved, carrier, joint, frame, edge, weights)
+        if kind != NO_MAP:
+            # A carry that magnifies (the carrier bone foreshortened in ``frame``)
+            # magnifies the noise of the point it carries: weighed by its inverse area.
+            weight = 1.0 / max(abs(a * d - b * c), MIN_AREA_SCALE)
+            px, py = state[frame, joint, 0], state[frame, joint, 1]
+            x += weight * (a * px + b * py + offset_x)
+            y += weight * (c * px + d * py + offset_y)
+            total += weight
+        count += 1
+        frame += step
+    return x / total, y / total
+
+
+@kernel
+def _carrier_map(
     state: np.ndarray, unresolved: np.ndarray, carrier: np.ndarray, joint: int,
     reference: int, now: int, weights: np.ndarray,
+) -> tuple[tuple[float, float, float, float, float, float], int]:
+    """The similarity carrying ``joint`` from frame ``reference`` to frame ``now``.
+
+    Fitted over the joint's carriers resolved in both frames
+    (:func:`~handdb.gapfill.transfer.fit_map` with ``affine=False``); the parameters are
+    those of :func:`_carry_point`. Returns the map and its kind.
+    """
+    for k in range(carrier.size):
+        weights[k] = (carrier[k] and k != joint and not unresolved[reference, k]
+                      and not unresolved[now, k])
+    return fit_map(state[reference], state[now], weights, False)
+
+
+@kernel
+def _carry_point(
+    state: np.ndarray, unresolved: np.ndarray, carrier: np.ndarray, joint: int,
+    reference: int, now: int, weights: np.ndarray, query_x: float, query_y: float,
 ) -> tuple[float, float]:
-    """Carry a joint's point from frame ``reference`` to frame ``now`` with its carriers.
+    """Carry a point from frame ``reference`` to frame ``now`` with the joint's carriers.
 
     The similarity from the carriers' points at ``reference`` to those at ``now``, fitted
     over the carriers resolved in both frames (:func:`~handdb.gapfill.transfer.fit_maps`
-    with ``affine=False``), is applied to the joint's point at ``reference``.
+    with ``affine=False``), is applied to the point ``(query_x, query_y)`` (the joint's,
+    or an estimate of it, at ``reference``).
 
     Parameters
     ----------
@@ -428,19 +523,17 @@ def _carry_point(
         The joint and the two frames.
     weights
         ``(J,) bool``: scratch space, overwritten.
+    query_x, query_y
+        The point carried, pixels.
 
     Returns
     -------
     x, y
-        The carried point, pixels; the point at ``reference`` if no carrier is resolved in
-        both frames.
+        The carried point, pixels; the query itself if no carrier is resolved in both
+        frames.
     """
-    for k in range(carrier.size):
-        weights[k] = (carrier[k] and k != joint and not unresolved[reference, k]
-                      and not unresolved[now, k])
-    (a, b, c, d, offset_x, offset_y), kind = fit_map(state[reference], state[now], weights,
-                                                       False)
-    query_x, query_y = state[reference, joint, 0], state[reference, joint, 1]
+    (a, b, c, d, offset_x, offset_y), kind = _carrier_map(state, unresolved, carrier, joint,
+                                                          reference, now, weights)
     if kind == NO_MAP:
         return query_x, query_y
     return a * query_x + b * query_y + offset_x, c * query_x + d * query_y + offset_y

@@ -3,14 +3,20 @@ import pytest
 from scipy.interpolate import PchipInterpolator
 
 from handdb.gapfill import METHODS, UNFILLED, fill_gaps
-from handdb.gapfill.auto import VALIDATION_GAPS, edge_validation_mask, validation_mask
+from handdb.gapfill.auto import (
+    SHORT_GAP,
+    VALIDATION_GAPS,
+    edge_validation_mask,
+    estimate_long_gaps,
+    validation_mask,
+)
 from handdb.gapfill.gaps import find_gaps
 from handdb.gapfill.interpolate import interpolate_gaps
 from handdb.gapfill.lowrank import lowrank_reconstruct
 from handdb.gapfill.refine import bone_bounds, refine_bone_lengths
 from handdb.gapfill.regression import regression_fill
 from handdb.gapfill.rest_pose import rest_pose_2d
-from handdb.gapfill.rigid import carry_along_chains, palm_joints
+from handdb.gapfill.rigid import carry_along_chains, carry_along_chains_many, palm_joints
 from handdb.hand.skeletons import load_skeleton
 
 
@@ -222,6 +228,74 @@ def test_edge_validation_hides_as_many_frames_beside_an_edge_gap_as_it_has():
     # the run 70-89 between two edge gaps is split, its middle frame (80) observed
     assert np.flatnonzero(hidden[:, 2]).tolist() == [*range(70, 80), *range(81, 90)]
     assert not hidden[:, 3:].any()
+
+
+def test_edge_validation_reaches_across_a_short_dropout_to_extrapolate_as_far_as_the_gap():
+    missing = np.zeros((100, 2), dtype=bool)
+    missing[52:, 0] = True                  # trailing, 48 frames
+    missing[45:47, 0] = True                # a detector's dropout just before it
+    missing[20:40, 1] = True                # an interior gap longer than a dropout
+    missing[60:, 1] = True                  # trailing, 40 frames
+    gaps = find_gaps(missing)
+    hidden = edge_validation_mask(missing, gaps, bridged=SHORT_GAP)
+    assert not (hidden & missing).any()
+    # the trial runs across the dropout, from frame 4 (48 frames before the gap)
+    assert np.flatnonzero(hidden[:, 0]).tolist() == [*range(4, 45), *range(47, 52)]
+    # a gap longer than a dropout still ends the run
+    assert np.flatnonzero(hidden[:, 1]).tolist() == list(range(41, 60))
+    # cut at the dropout, the trial would extrapolate 5 frames for a 48-frame gap
+    assert np.flatnonzero(edge_validation_mask(missing, gaps)[:, 0]).tolist() == list(
+        range(48, 52))
+
+
+def test_chain_fill_from_averaged_edges_holds_less_of_the_edge_noise(mediapipe):
+    n_frames, trailing = 80, 50
+    t = np.linspace(0.0, 1.0, n_frames)
+    angle, scale = 1.5 * t, 1.0 + 0.5 * t
+    cos, sin = scale * np.cos(angle), scale * np.sin(angle)
+    rotation = np.stack([np.stack([cos, -sin], axis=-1), np.stack([sin, cos], axis=-1)], axis=1)
+    uv = 3.0 * rest_pose_2d(mediapipe) @ np.swapaxes(rotation, 1, 2) + np.stack(
+        [200 * t, 50 * t], axis=-1)[:, None]
+    tips = [mediapipe.index(f"{finger}_tip") for finger in ("index", "middle", "ring", "little")]
+    missing = np.zeros((n_frames, mediapipe.n_joints), dtype=bool)
+    missing[trailing:, tips] = True
+    gaps = find_gaps(missing)
+    exact = carry_along_chains_many(uv, [(missing, gaps)], mediapipe, [np.full(len(gaps), 9)])
+    assert np.allclose(exact[0], uv, rtol=0, atol=1e-9)     # the mean of exact carries
+    noisy = uv.copy()
+    noisy[:trailing, tips] += np.random.default_rng(0).normal(0.0, 1.0, (trailing, 4, 2))
+    errors = [np.sqrt(np.mean((carry_along_chains_many(
+        noisy, [(missing, gaps)], mediapipe, [np.full(len(gaps), reach)])[0]
+        - uv)[trailing:, tips] ** 2)) for reach in (1, 9)]
+    # the tips are noisy, their carriers exact: the mean of 9 frames holds a third of it
+    assert errors[1] < 0.5 * errors[0]
+
+
+def test_regression_keeps_a_predictor_across_a_dropout_within_the_gap(mediapipe):
+    n_frames = 200
+    t = np.linspace(0.0, 4.0 * np.pi, n_frames)[:, None, None]
+    rng = np.random.default_rng(3)
+    phase, size = rng.uniform(0, 2 * np.pi, (2, 1, 21, 2))
+    uv = 100.0 + 30.0 * rng.uniform(0.5, 1.5, (1, 21, 2)) * np.sin(t * (1 + size) + phase)
+    tip, predictor = mediapipe.index("index_tip"), mediapipe.index("middle_tip")
+    uv[:, tip] = uv[:, predictor] @ np.array([[0.8, -0.3], [0.4, 1.1]]) + 20.0
+    fingers = np.flatnonzero(~palm_joints(mediapipe))
+    missing = np.zeros((n_frames, mediapipe.n_joints), dtype=bool)
+    missing[80:130, tip] = True
+    for k, joint in enumerate(j for j in fingers if j != tip):
+        missing[85 + 2 * k, joint] = True          # every finger predictor drops a frame
+    gaps = find_gaps(missing).select(find_gaps(missing).joint == tip)
+    filled = interpolate_gaps(np.where(missing[..., None], np.nan, uv), missing, "pchip")
+    truth = uv[80:130, tip]
+    kept, = estimate_long_gaps(("regression",), uv, filled, [(missing, gaps)], mediapipe,
+                               bridged=1)[0]
+    dropped, = estimate_long_gaps(("regression",), uv, filled, [(missing, gaps)],
+                                  mediapipe)[0]
+    errors = [np.sqrt(np.mean(np.sum((estimate - truth) ** 2, axis=-1)))
+              for estimate in (kept, dropped)]
+    # kept: the tip follows its predictor (the other predictors' dropped frames are
+    # interpolated); dropped: no predictor seen throughout, the chain's estimate
+    assert errors[0] < 2.0 and errors[1] > 10 * errors[0]
 
 
 def _refine_bone_by_bone(uv, missing, skeleton, bounds):
