@@ -18,10 +18,9 @@ from handdb.errors import HanddbError
 from handdb.ingest.xray import SEGMENTS
 from handdb.lengths.ratios import (
     ALL_COHORT,
-    joint_ratios,
     paper_discrepancies,
     place_joints,
-    table1_measurements,
+    table1_ratios,
 )
 from handdb.paths import DEFAULT_DB
 from handdb.store.database import Store
@@ -41,7 +40,7 @@ def load_ratios(db: str) -> tuple[pa.Table, str]:
     stored = Store(db).read_table("joint_ratios")
     if stored.num_rows:
         return stored, f"database {db}"
-    return joint_ratios(table1_measurements()), "Chaudhry et al., Table 1"
+    return table1_ratios(), "Chaudhry et al., Table 1"
 
 
 @app.command()

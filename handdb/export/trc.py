@@ -28,6 +28,7 @@ from pathlib import Path
 
 import numpy as np
 
+from handdb.clip import finite_points
 from handdb.export.markers import y_up_markers
 from handdb.hand.skeletons import Skeleton
 
@@ -84,7 +85,7 @@ def trc_rows(xyz: np.ndarray, fps: float) -> str:
         Frames per second.
     """
     n_frames, n_markers = xyz.shape[:2]
-    present = np.isfinite(xyz).all(axis=-1)
+    present = finite_points(xyz)
     cells = np.char.mod(f"%.{DECIMALS}f", np.where(present[..., None], xyz, 0.0))
     cells[~present] = ""
     frames = np.arange(1, n_frames + 1)

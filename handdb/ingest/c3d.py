@@ -29,7 +29,7 @@ from pathlib import Path
 import c3d
 import numpy as np
 
-from handdb.clip import METERS_PER_UNIT, ClipSpec
+from handdb.clip import METERS_PER_UNIT, ClipSpec, finite_points
 from handdb.errors import InputError
 from handdb.hand.skeletons import Skeleton
 from handdb.ingest.limits import (
@@ -232,7 +232,7 @@ def read(path: str | Path, spec: ClipSpec, skeleton: Skeleton) -> Positions:
                            lambda k: (None, LABELS_PARAMETER))
     known = np.flatnonzero(joints >= 0)
     xyz_known = points.points[:, known, :3]
-    present = ((points.points[:, known, 3] >= 0) & np.isfinite(xyz_known).all(axis=-1)
+    present = ((points.points[:, known, 3] >= 0) & finite_points(xyz_known)
                & (xyz_known != 0).any(axis=-1))
     frame, column = np.nonzero(present)
     scale = METERS_PER_UNIT[points.units] / spec.meters_per_unit
@@ -281,7 +281,7 @@ def write(path: str | Path, markers: np.ndarray, skeleton: Skeleton, *, units: s
     """
     writer = c3d.Writer(point_rate=point_rate, point_units=units)
     writer.set_point_labels(list(skeleton.joints))
-    missing = ~np.isfinite(markers).all(axis=-1)
+    missing = ~finite_points(markers)
     points = np.zeros(markers.shape[:2] + (5,), dtype=np.float32)
     points[..., :3] = np.where(missing[..., None], 0.0, markers)
     points[..., 3] = np.where(missing, -1.0, 0.0)

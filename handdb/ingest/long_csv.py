@@ -12,7 +12,7 @@ from pathlib import Path
 import numpy as np
 import pyarrow as pa
 
-from handdb.clip import ClipSpec
+from handdb.clip import ClipSpec, finite_points
 from handdb.errors import InputError
 from handdb.hand.skeletons import Skeleton
 from handdb.ingest.delimited import (
@@ -148,7 +148,7 @@ def write_positions(path: str | Path, xyz: np.ndarray, skeleton: Skeleton) -> No
     skeleton
         The skeleton ordering the joint axis.
     """
-    frame, joint = np.nonzero(np.isfinite(xyz).all(axis=-1))
+    frame, joint = np.nonzero(finite_points(xyz))
     columns = {"frame": pa.array(frame, pa.int64()),
                "joint": pa.array(np.asarray(skeleton.joints)[joint])}
     columns.update({axis: pa.array(xyz[frame, joint, k]) for k, axis in enumerate("xyz")})

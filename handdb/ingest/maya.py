@@ -16,7 +16,7 @@ from pathlib import Path
 import numpy as np
 import pyarrow as pa
 
-from handdb.clip import ClipSpec
+from handdb.clip import ClipSpec, finite_points
 from handdb.errors import InputError
 from handdb.hand.skeletons import Skeleton
 from handdb.ingest.delimited import (
@@ -106,7 +106,7 @@ def write(path: str | Path, xyz: np.ndarray, skeleton: Skeleton) -> None:
     """
     if skeleton.name != SKELETON:
         raise ValueError(f"a Maya export holds '{SKELETON}' points, not '{skeleton.name}'")
-    joint, frame = np.nonzero(np.isfinite(xyz).all(axis=-1).T)
+    joint, frame = np.nonzero(finite_points(xyz).T)
     maya = xyz[frame, joint] * MAYA_TO_CAMERA
     columns = {
         "joint": pa.array([f"j{point_id}" for point_id in np.asarray(skeleton.ids)[joint]]),

@@ -42,7 +42,7 @@ from typing import Any
 
 import numpy as np
 
-from handdb.clip import ClipSpec
+from handdb.clip import ClipSpec, finite_points
 from handdb.errors import InputError
 from handdb.hand.skeletons import Skeleton, correspondence, load_skeleton
 from handdb.ingest.jsondoc import finite_number, load_json, number_array, preview
@@ -459,7 +459,7 @@ def write(path: str | Path, uv: np.ndarray, confidence: np.ndarray | None,
     src, dst = correspondence(skeleton, hand)
     scale = np.ones(2) if image_size is None else np.asarray(image_size, dtype=np.float64)
     present = np.zeros((uv.shape[0], hand.n_joints), dtype=bool)
-    present[:, dst] = np.isfinite(uv[:, src]).all(axis=-1)
+    present[:, dst] = finite_points(uv[:, src])
     landmarks = np.zeros((uv.shape[0], hand.n_joints, 4))
     landmarks[:, dst, :2] = uv[:, src] / scale
     landmarks[:, dst, 3] = 1.0 if confidence is None else np.nan_to_num(confidence[:, src])

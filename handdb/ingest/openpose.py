@@ -32,7 +32,7 @@ from typing import Any
 
 import numpy as np
 
-from handdb.clip import ClipSpec
+from handdb.clip import ClipSpec, finite_points
 from handdb.errors import InputError
 from handdb.hand.skeletons import Skeleton, correspondence, load_skeleton
 from handdb.ingest.jsondoc import load_json, number_array, preview
@@ -346,7 +346,7 @@ def write(path: str | Path, uv: np.ndarray, confidence: np.ndarray | None,
     points = np.zeros((uv.shape[0], load_skeleton(HAND_SKELETON).n_joints, VALUES_PER_POINT))
     points[:, dst, :2] = uv[:, src]
     points[:, dst, 2] = conf[:, src]
-    points[~np.isfinite(points[..., :2]).all(axis=-1)] = 0.0
+    points[~finite_points(points[..., :2])] = 0.0
     stem = folder.name.removesuffix(FORMAT.suffix)
     for t, frame_points in enumerate(points):
         people = []

@@ -25,7 +25,7 @@ import numpy as np
 import pyarrow as pa
 import pyarrow.compute as pc
 
-from handdb.clip import METERS_PER_UNIT, ClipSpec
+from handdb.clip import METERS_PER_UNIT, ClipSpec, finite_points
 from handdb.errors import InputError
 from handdb.hand.skeletons import Skeleton
 from handdb.ingest.delimited import DelimitedTable, TextLines, read_bytes, read_delimited
@@ -227,7 +227,7 @@ def read(path: str | Path, spec: ClipSpec, skeleton: Skeleton) -> Positions:
     frame = _frames(table)
     kept = np.flatnonzero(joints >= 0)
     xyz = np.stack([_coordinates(table, names[k]) for k in kept], axis=1)
-    row, column = np.nonzero(np.isfinite(xyz).all(axis=-1))
+    row, column = np.nonzero(finite_points(xyz))
     scale = METERS_PER_UNIT[QTM_UNITS] / spec.meters_per_unit
     source, files = single_file_rows(path, row.size)
     joint_names = list(skeleton.joints)

@@ -31,7 +31,7 @@ METHODS.add(MODEL_FIT, LazyFunction("handdb.lifting.model_fit:fit_2d"))
 
 #: Version of lifting. Raise it when a change alters the output; it
 #: enters the build keys (:mod:`handdb.build.keys`), a docstring edit or a speed-up does not.
-VERSION = 5
+VERSION = 6
 
 __getattr__ = lazy_attributes(__name__, {"lift": "handdb.lifting.registry",
                                          "LiftResult": "handdb.lifting.result"})

@@ -2,12 +2,13 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
 from typing import Any, Protocol
 
 import numpy as np
 
 from handdb.checks import check_hand
-from handdb.clip import SAMPLINGS, VIDEO, Camera
+from handdb.clip import SAMPLINGS, VIDEO, Camera, finite_points
 from handdb.errors import BoneLengthError
 from handdb.hand.skeletons import Skeleton
 from handdb.lifting.methods import DEFAULT_METHOD, METHODS
@@ -96,9 +97,26 @@ def lift(
     if sampling not in SAMPLINGS:
         raise ValueError(f"sampling must be one of {', '.join(SAMPLINGS)}, got {sampling!r}")
     if sampling == VIDEO or len(uv) < 2:
-        return run(uv, skeleton, bone_lengths, camera, hand=hand, **params)
-    return _joined([run(uv[t:t + 1], skeleton, bone_lengths, camera, hand=hand, **params)
-                    for t in range(len(uv))])
+        lifted = run(uv, skeleton, bone_lengths, camera, hand=hand, **params)
+    else:
+        lifted = _joined([run(uv[t:t + 1], skeleton, bone_lengths, camera, hand=hand,
+                              **params) for t in range(len(uv))])
+    return _unseen_unplaced(lifted, uv)
+
+
+def _unseen_unplaced(lifted: LiftResult, uv: np.ndarray) -> LiftResult:
+    """``lifted`` with every coordinate NaN where the joint has no image point.
+
+    A method may leave a coordinate it knows by convention on a joint it did not see (the
+    orthographic root's ``z = 0``, a pinhole root depth interpolated over an empty frame);
+    a stored position is either whole or absent.
+    """
+    unseen = ~finite_points(uv)
+    if not unseen.any():
+        return lifted
+    xyz = lifted.xyz.copy()
+    xyz[unseen] = np.nan
+    return replace(lifted, xyz=xyz)
 
 
 def _joined(frames: list[LiftResult]) -> LiftResult:

@@ -27,9 +27,10 @@ import numpy as np
 from scipy.optimize import least_squares
 
 from handdb.checks import mm_per_unit
+from handdb.clip import finite_points
 from handdb.hand.model import N_DOF, HandModel, forward_kinematics
 from handdb.lengths.bone_lengths import BoneLengths
-from handdb.lengths.ratios import bone_ratios, joint_ratios, table1_measurements
+from handdb.lengths.ratios import bone_ratios, table1_ratios
 from handdb.markers.solve import SOLVER_TOLERANCE, fit_pose_lsq, initial_pose
 
 #: Calibration frames fitted together.
@@ -135,7 +136,7 @@ def default_ratio_prior(model: HandModel) -> tuple[np.ndarray, np.ndarray]:
     From the X-ray statistics of Chaudhry et al.'s Table 1 (cohort ``all``); NaN for bones
     that are not phalanges.
     """
-    return bone_ratios(model.skeleton, joint_ratios(table1_measurements()))
+    return bone_ratios(model.skeleton, table1_ratios())
 
 
 class _Problem:
@@ -150,7 +151,7 @@ class _Problem:
                  prior_lengths: np.ndarray, ratio_prior: tuple[np.ndarray, np.ndarray]):
         skeleton = model.skeleton
         self.model = model
-        self.visible = np.isfinite(markers).all(axis=-1)
+        self.visible = finite_points(markers)
         self.target = markers[self.visible]
         self.n_frames = len(markers)
         self.palm = model.palm_joints
@@ -243,7 +244,7 @@ def calibrate(model: HandModel, markers: np.ndarray, *, n_frames: int = CALIBRAT
     Calibration
     """
     markers = np.asarray(markers, dtype=np.float64)
-    visible = np.isfinite(markers).all(axis=-1)
+    visible = finite_points(markers)
     prior_lengths, counts = measured_lengths(model, markers)
     start_model = model.with_geometry(prior_lengths)
     frames = select_frames(visible, n_frames)

@@ -16,7 +16,7 @@ import numpy as np
 import pyarrow as pa
 
 from handdb.checks import as_points, check_hand, mm_per_unit
-from handdb.clip import ClipSpec
+from handdb.clip import ClipSpec, finite_points
 from handdb.errors import ClipDataError, ParameterError
 from handdb.export.rotations import JointMotion
 from handdb.hand.model import (
@@ -145,7 +145,7 @@ def fit_markers(markers: np.ndarray, *, hand: str = "right", units: str = "mm",
     scale = mm_per_unit(units)
     template = build_hand_model(check_hand(hand), skeleton=skeleton)
     mm = as_points(markers, template.n_joints, 3, "markers") * scale
-    visible = np.asarray(np.isfinite(mm).all(axis=-1))
+    visible = np.asarray(finite_points(mm))
     _check_enough_markers(template.skeleton, visible, calibrating=not bone_lengths)
     if bone_lengths:
         model = build_hand_model(hand, {k: v * scale for k, v in bone_lengths.items()},

@@ -23,6 +23,7 @@ from scipy.ndimage import median_filter
 from scipy.optimize import least_squares
 from scipy.spatial.transform import Rotation, Slerp
 
+from handdb.clip import finite_points
 from handdb.errors import ClipDataError, ParameterError, UnknownNameError
 from handdb.hand.model import (
     N_DOF,
@@ -512,7 +513,7 @@ def track(model: HandModel, markers: np.ndarray, *, solver: str = "lsq",
     numpy.ndarray
         ``(T, 33)`` poses.
     """
-    visible = np.isfinite(markers).all(axis=-1)
+    visible = finite_points(markers)
     previous = initial_pose(model, markers[0], visible[0]) if start is None else start
     rng = rng or np.random.default_rng(0)
     poses = np.empty((len(markers), N_DOF))
@@ -577,7 +578,7 @@ def refine_poses(model: HandModel, markers: np.ndarray, guesses: np.ndarray, *,
     numpy.ndarray
         ``(F, 33)`` refined poses.
     """
-    visible = np.isfinite(markers).all(axis=-1)
+    visible = finite_points(markers)
     if solver == "pso":
         return fit_pose_pso(model, markers, visible, guesses, guesses, anchor_weight=weight,
                             cutoff=cutoff, settings=settings, rng=rng)

@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pyarrow as pa
 
+from handdb.clip import finite_points
 from handdb.hand.skeletons import Skeleton
 from handdb.ingest.observations import Positions
 from handdb.store import tables
@@ -29,7 +30,7 @@ def markers_3d_table(clip_id: str, markers: np.ndarray, skeleton: Skeleton) -> p
     skeleton
         The skeleton ordering the joint axis.
     """
-    frame, joint = np.nonzero(np.isfinite(markers).all(axis=-1))
+    frame, joint = np.nonzero(finite_points(markers))
     xyz = markers[frame, joint]
     return tables.from_columns("markers_3d", {
         "clip_id": clip_id,

@@ -28,6 +28,20 @@ def test_empty_frames_leave_the_others_placed_without_warnings(camera):
     assert np.isfinite(xyz[kept]).all()
 
 
+@pytest.mark.parametrize("method", ["kinematic", "thesis"])
+@pytest.mark.parametrize("camera", ["orthographic", "pinhole"])
+def test_joints_without_image_points_have_no_coordinate(camera, method):
+    # The orthographic root sits at z = 0 by convention and a pinhole root depth is
+    # interpolated across empty frames: neither may leave a half position behind.
+    clip = synthesize_clip("wave", 40, camera=camera, seed=1)
+    skeleton = load_skeleton(clip.skeleton)
+    uv = clip.uv.copy()
+    uv[EMPTY] = np.nan
+    uv[10, 5] = np.nan
+    xyz = lift(uv, skeleton, bone_length_array(skeleton, clip.bone_lengths),
+               Camera(**clip.camera), hand=clip.hand, method=method).xyz
+    assert np.isnan(xyz[EMPTY]).all()
+    assert np.isnan(xyz[10, 5]).all()
 
 #: Mean change of a kept joint allowed when frames are dropped, mm. Before the sign chains
 #: bridged dropped frames and the scale and root depth skipped them, these clips moved by
