@@ -23,7 +23,9 @@ markers per frame, no bone lengths given:
   it does not mark.
 
 Run: ``OPENBLAS_NUM_THREADS=1 .venv/bin/python benchmarks/bench_fitting.py [n_frames]
-[sections]`` with ``sections`` a comma-separated subset of :data:`SECTIONS` (default all).
+[sections] [limit_weight]`` with ``sections`` a comma-separated subset of :data:`SECTIONS`
+(default all) and ``limit_weight`` the calibration's weight of joint angles beyond the
+bounds (mm/rad, default 0: off; the held-out capture always runs the default).
 """
 
 from __future__ import annotations
@@ -44,6 +46,7 @@ REPO = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO))
 
 from gapfill_datasets import GLOVE, GLOVE_MARKERS, GLOVE_STEP, glove_markers  # noqa: E402
+
 from tests.support.paths import REAL_TOOLS  # noqa: E402
 from tests.support.real_data import load_interhand, pseudo_clip  # noqa: E402
 
@@ -127,7 +130,7 @@ POPULATION_SEEDS = range(6)
 POPULATION_FRAMES = 60
 
 
-def population() -> None:
+def population(limit_weight: float = 0.0) -> None:
     rows = []
     for seed in POPULATION_SEEDS:
         clip = synthesize_clip("random", POPULATION_FRAMES, seed=seed)
@@ -135,7 +138,8 @@ def population() -> None:
         hidden = occlusion_runs(clip.xyz.shape[:2], HIDDEN_FRACTION, MEAN_RUN_FRAMES, rng)
         markers = clip.xyz + rng.normal(0.0, NOISE_MM, clip.xyz.shape)
         markers[hidden] = np.nan
-        fit = fit_markers(markers, hand=clip.hand, units=clip.units)
+        fit = fit_markers(markers, hand=clip.hand, units=clip.units,
+                          calibration_limit_weight=limit_weight)
         err = errors(fit.joints, clip.xyz)
         rows.append((np.nanmean(fit.residual), err.mean(), err[hidden].mean()))
         print(f"population hand {seed}: visible-marker residual {rows[-1][0]:.2f} mm, MPJPE "
@@ -145,7 +149,7 @@ def population() -> None:
           f"hidden {mean[2]:.2f} mm")
 
 
-def dhg_sample() -> None:
+def dhg_sample(limit_weight: float = 0.0) -> None:
     path = DHG / "skeletons_world.txt"
     if not path.is_file():
         print("DHG sample: absent, skipped")
@@ -156,7 +160,7 @@ def dhg_sample() -> None:
     for frame in hidden:
         frame[rng.choice(np.arange(1, 22), 6, replace=False)] = True
     partial = np.where(hidden[..., None], np.nan, markers)
-    fit = fit_markers(partial, skeleton="dhg22")
+    fit = fit_markers(partial, skeleton="dhg22", calibration_limit_weight=limit_weight)
     err = errors(fit.joints, markers)
     print(f"DHG sample on dhg22, 6 of 22 joints hidden a frame: visible residual "
           f"{np.nanmean(fit.residual):.1f} mm, MPJPE {err.mean():.1f} mm (hidden "
@@ -164,7 +168,8 @@ def dhg_sample() -> None:
     markers = convert_points(markers, load_skeleton("dhg22"), load_skeleton("mediapipe21"))
     for hand in ("right", "left"):
         start = time.perf_counter()
-        fit = fit_markers(markers, hand=hand, units="mm")
+        fit = fit_markers(markers, hand=hand, units="mm",
+                          calibration_limit_weight=limit_weight)
         seconds = time.perf_counter() - start
         residual = fit.residual
         worst = fit.model.skeleton.joints[int(np.nanargmax(np.nanmean(residual, 0)))]
@@ -174,7 +179,7 @@ def dhg_sample() -> None:
               f"{len(markers) / seconds:.2f} frames/s")
 
 
-def interhand() -> None:
+def interhand(limit_weight: float = 0.0) -> None:
     if not INTERHAND.is_file():
         print("InterHand2.6M: absent, skipped")
         return
@@ -189,7 +194,8 @@ def interhand() -> None:
             markers = truth + rng.normal(0.0, NOISE_MM, truth.shape)
             markers[hidden] = np.nan
             start = time.perf_counter()
-            fit = fit_markers(markers, hand=capture.hand, units="mm")
+            fit = fit_markers(markers, hand=capture.hand, units="mm",
+                              calibration_limit_weight=limit_weight)
             seconds = time.perf_counter() - start
             err = errors(fit.joints, truth)
             per_joint = err.mean(axis=0)
@@ -206,7 +212,7 @@ def interhand() -> None:
               f"{median[1]:.2f}, {median[2]:.2f})")
 
 
-def glove() -> None:
+def glove(limit_weight: float = 0.0) -> None:
     if not GLOVE.is_file():
         print("Qualisys glove: absent, skipped")
         return
@@ -220,7 +226,8 @@ def glove() -> None:
         markers[:, [skeleton.index(j) for j in from_glove]] = recording[
             first:first + GLOVE_CLIP_FRAMES]
         start = time.perf_counter()
-        fit = fit_markers(markers, hand=GLOVE_HAND, units="mm")
+        fit = fit_markers(markers, hand=GLOVE_HAND, units="mm",
+                          calibration_limit_weight=limit_weight)
         seconds = time.perf_counter() - start
         per_frame = np.nanmean(fit.residual, axis=1)
         per_joint = np.nanmean(fit.residual, axis=0)
@@ -244,7 +251,8 @@ SECTIONS = ("held_out", "population", "dhg", "interhand", "glove")
 if __name__ == "__main__":
     frames = int(sys.argv[1]) if len(sys.argv) > 1 else 150
     chosen = sys.argv[2].split(",") if len(sys.argv) > 2 else SECTIONS
-    runs = {"held_out": lambda: held_out(frames), "population": population,
+    weight = float(sys.argv[3]) if len(sys.argv) > 3 else 0.0
+    runs = {"held_out": lambda _: held_out(frames), "population": population,
             "dhg": dhg_sample, "interhand": interhand, "glove": glove}
     for section in chosen:
-        runs[section]()
+        runs[section](weight)
