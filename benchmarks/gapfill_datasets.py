@@ -164,7 +164,7 @@ def mediapipe_cases() -> list[Case]:
             for h in range(uv.shape[1])]
 
 
-def _glove_markers() -> np.ndarray:
+def glove_markers() -> np.ndarray:
     """The glove's hand markers, ``(T, 13, 3)`` mm, NaN where lost."""
     with GLOVE.open() as fh:
         header = {}
@@ -185,7 +185,7 @@ def glove_cases() -> list[Case]:
     """The glove's 400-frame clips, orthographic and pinhole (empty when absent)."""
     if not GLOVE.is_file():
         return []
-    xyz = _glove_markers()[::GLOVE_STEP]
+    xyz = glove_markers()[::GLOVE_STEP]
     skeleton = glove_skeleton()
     # Seen from above: image x, y along the lab's x and -y; depth down from the camera.
     camera = np.stack([xyz[..., 0], -xyz[..., 1],
@@ -349,8 +349,8 @@ def main() -> None:
 
 
 __all__ = ["Case", "MASKS", "METHODS", "NOISES_PX", "Scores", "best_thesis", "dhg_cases",
-           "glove_cases", "glove_skeleton", "mediapipe_cases", "real_cases", "score",
-           "synthetic_cases", "table"]
+           "glove_cases", "glove_markers", "glove_skeleton", "mediapipe_cases", "real_cases",
+           "score", "synthetic_cases", "table"]
 
 
 if __name__ == "__main__":

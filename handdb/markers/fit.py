@@ -108,7 +108,7 @@ def fit_markers(markers: np.ndarray, *, hand: str = "right", units: str = "mm",
                 bone_lengths: dict[str, float] | None = None, solver: str = DEFAULT_SOLVER,
                 key_step: int = KEY_STEP, correspondence: str = "labelled",
                 filter_passes: int = 1, settings: SwarmSettings | None = None,
-                seed: int = 0) -> MarkerFit:
+                seed: int = 0, calibration_limit_weight: float = 0.0) -> MarkerFit:
     """Fit the 33-DoF hand model to a marker track.
 
     Parameters
@@ -137,6 +137,9 @@ def fit_markers(markers: np.ndarray, *, hand: str = "right", units: str = "mm",
         Particle swarm settings (default: the paper's).
     seed
         Seed of the swarm's random numbers.
+    calibration_limit_weight
+        Weight of the calibration poses' angles beyond the joint bounds, mm per radian
+        (:func:`~handdb.markers.calibration.calibrate`'s ``limit_weight``).
 
     Returns
     -------
@@ -152,7 +155,7 @@ def fit_markers(markers: np.ndarray, *, hand: str = "right", units: str = "mm",
                                  skeleton=skeleton)
         calibration = None
     else:
-        calibration = calibrate(template, mm)
+        calibration = calibrate(template, mm, limit_weight=calibration_limit_weight)
         model = calibration.model
     rich = np.flatnonzero(visible.sum(axis=1) >= MIN_START_MARKERS)
     if not rich.size:

@@ -5,12 +5,14 @@ from handdb.hand.model import forward_kinematics
 from handdb.lengths.bone_lengths import bone_lengths_table
 from handdb.markers.calibration import (
     CALIBRATED_SOURCE,
+    LIMIT_PRIOR_MM_PER_RAD,
     calibrate,
     calibrated_bone_lengths,
     measured_lengths,
     select_frames,
 )
 from handdb.store import tables
+from handdb.synthetic import synthesize_clip
 from tests.support.motions import noisy_markers, smooth_poses
 
 
@@ -80,3 +82,26 @@ def test_bone_length_rows_are_in_clip_units(calibration):
                        strict=True))
     bone = calibration.model.skeleton.bone_names.index("index_pip")
     assert lengths["index_pip"] == pytest.approx(calibration.model.bone_lengths[bone] / 10.0)
+
+
+def _excursion_deg(model, poses):
+    """Largest joint angle beyond the model's bounds over the poses, degrees."""
+    beyond = np.maximum(poses - model.upper, 0.0) + np.maximum(model.lower - poses, 0.0)
+    return float(np.degrees(beyond[:, 6:].max()))
+
+
+def test_limit_weight_keeps_calibration_poses_the_tracker_can_take(model):
+    clip = synthesize_clip("random", 60, seed=0)
+    markers = noisy_markers(clip.xyz, noise=1.0, missing_share=0.1, seed=0)
+    # The little finger's tip and middle bones hidden in every other frame: in those
+    # calibration frames its angles answer to nothing but the shared shape.
+    little = [model.skeleton.index(j) for j in ("little_pip", "little_dip", "little_tip")]
+    markers[::2, little] = np.nan
+    free = calibrate(model, markers)
+    bounded = calibrate(model, markers, limit_weight=LIMIT_PRIOR_MM_PER_RAD)
+    # Unbounded LM turns a finger hidden in some calibration frames far past its joints'
+    # bounds (hundreds of degrees); the limit rows keep every angle where tracking can go.
+    assert _excursion_deg(model, free.poses) > 30.0
+    assert _excursion_deg(model, bounded.poses) < 2.0
+    truth = np.array([clip.bone_lengths[b] for b in model.skeleton.bone_names])
+    assert np.abs(bounded.model.bone_lengths - truth).mean() < 1.5
