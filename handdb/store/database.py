@@ -148,8 +148,8 @@ class Store:
     def _split(self) -> tuple[fsspec.AbstractFileSystem, str]:
         """The filesystem and the location on it, resolved once per :class:`Store`.
 
-        A clip's commit asks for paths about 190 times; resolving the URL each time
-        (``fsspec.core.url_to_fs``) cost about 6 % of a 300-frame clip's build.
+        A clip's export and commit ask for paths about 190 times; resolving the URL
+        (``fsspec.core.url_to_fs``) each time cost 1-2 ms of a 300-frame clip's commit.
         """
         fs, root = fsspec.core.url_to_fs(self.url)
         return fs, root.rstrip("/")
