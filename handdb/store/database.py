@@ -36,6 +36,7 @@ import time
 import uuid
 from collections.abc import Iterator, Mapping
 from dataclasses import dataclass
+from functools import cached_property
 
 import fsspec
 import pyarrow as pa
@@ -136,18 +137,24 @@ class Store:
     @property
     def fs(self) -> fsspec.AbstractFileSystem:
         """The filesystem the database lives on."""
-        return self._split()[0]
+        return self._split[0]
 
     @property
     def root(self) -> str:
         """The database location within :attr:`fs`."""
-        return self._split()[1]
+        return self._split[1]
 
+    @cached_property
     def _split(self) -> tuple[fsspec.AbstractFileSystem, str]:
+        """The filesystem and the location on it, resolved once per :class:`Store`.
+
+        A clip's export and commit ask for paths about 190 times; resolving the URL
+        (``fsspec.core.url_to_fs``) each time cost 1-2 ms of a 300-frame clip's commit.
+        """
         fs, root = fsspec.core.url_to_fs(self.url)
         return fs, root.rstrip("/")
 
-    @property
+    @cached_property
     def is_local(self) -> bool:
         """Whether the database is a folder on this machine."""
         return isinstance(self.fs, LocalFileSystem)
