@@ -21,9 +21,10 @@
    by how well each refills runs of that joint's own observed frames hidden on purpose
    (:func:`validation_mask` and, beside a leading or trailing gap,
    :func:`edge_validation_mask`, which hides the frames next to the gap so that the trial
-   extrapolates as far as the gap does, across short dropouts): weights inversely proportional to the squared
-   validation error. ``long_gaps`` picks one estimate instead (``"chain"``,
-   ``"regression"``, or ``"lowrank"``, the iterated PCA of :mod:`handdb.gapfill.lowrank`).
+   extrapolates as far as the gap does, across short dropouts): weights inversely
+   proportional to the squared validation error. ``long_gaps`` picks one estimate instead
+   (``"chain"``, ``"regression"``, or ``"lowrank"``, the iterated PCA of
+   :mod:`handdb.gapfill.lowrank`).
 5. Joints never observed are placed first, so that the other joints can lean on them:
    between their parent and only child where both are observed (a DIP an annotation
    skips, :func:`~handdb.gapfill.rigid.place_on_chords`, label ``chord``), else by the
