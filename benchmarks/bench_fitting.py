@@ -167,16 +167,20 @@ def dhg_sample(limit_weight: float = 0.0) -> None:
           f"{err[hidden].mean():.1f} mm)")
     markers = convert_points(markers, load_skeleton("dhg22"), load_skeleton("mediapipe21"))
     for hand in ("right", "left"):
-        start = time.perf_counter()
-        fit = fit_markers(markers, hand=hand, units="mm",
-                          calibration_limit_weight=limit_weight)
-        seconds = time.perf_counter() - start
+        fit, rate = timed_fit(markers, hand, limit_weight)
         residual = fit.residual
         worst = fit.model.skeleton.joints[int(np.nanargmax(np.nanmean(residual, 0)))]
         print(f"DHG sample as a {hand} hand: {len(markers)} frames, marker-to-joint residual "
               f"mean {np.nanmean(residual):.1f} mm, median {np.nanmedian(residual):.1f} mm, "
               f"95th pct {np.nanpercentile(residual, 95):.1f} mm; worst joint {worst}; "
-              f"{len(markers) / seconds:.2f} frames/s")
+              f"{rate:.2f} frames/s")
+
+
+def timed_fit(markers: np.ndarray, hand: str, limit_weight: float):
+    """Fit ``markers`` (``(T, J, 3)`` mm, NaN hidden) with no lengths; the fit and frames/s."""
+    start = time.perf_counter()
+    fit = fit_markers(markers, hand=hand, units="mm", calibration_limit_weight=limit_weight)
+    return fit, len(markers) / (time.perf_counter() - start)
 
 
 def interhand(limit_weight: float = 0.0) -> None:
@@ -193,10 +197,7 @@ def interhand(limit_weight: float = 0.0) -> None:
                       if occluded else np.zeros(truth.shape[:2], dtype=bool))
             markers = truth + rng.normal(0.0, NOISE_MM, truth.shape)
             markers[hidden] = np.nan
-            start = time.perf_counter()
-            fit = fit_markers(markers, hand=capture.hand, units="mm",
-                              calibration_limit_weight=limit_weight)
-            seconds = time.perf_counter() - start
+            fit, rate = timed_fit(markers, capture.hand, limit_weight)
             err = errors(fit.joints, truth)
             per_joint = err.mean(axis=0)
             worst = fit.model.skeleton.joints[int(np.argmax(per_joint))]
@@ -205,7 +206,7 @@ def interhand(limit_weight: float = 0.0) -> None:
             print(f"InterHand {capture.name} ({'~6 of 21 hidden' if occluded else 'all seen'}):"
                   f" visible residual {rows[-1][0]:.2f} mm, MPJPE {rows[-1][1]:.2f} mm "
                   f"(hidden {rows[-1][2]:.2f}), worst joint {worst} {per_joint.max():.1f} mm, "
-                  f"{INTERHAND_FRAMES / seconds:.1f} frames/s")
+                  f"{rate:.1f} frames/s")
         mean, median = np.mean(rows, axis=0), np.median(rows, axis=0)
         print(f"InterHand mean over {len(rows)} hands: visible {mean[0]:.2f}, MPJPE "
               f"{mean[1]:.2f}, hidden {mean[2]:.2f} mm (medians {median[0]:.2f}, "
@@ -225,10 +226,7 @@ def glove(limit_weight: float = 0.0) -> None:
         markers = np.full((GLOVE_CLIP_FRAMES, skeleton.n_joints, 3), np.nan)
         markers[:, [skeleton.index(j) for j in from_glove]] = recording[
             first:first + GLOVE_CLIP_FRAMES]
-        start = time.perf_counter()
-        fit = fit_markers(markers, hand=GLOVE_HAND, units="mm",
-                          calibration_limit_weight=limit_weight)
-        seconds = time.perf_counter() - start
+        fit, rate = timed_fit(markers, GLOVE_HAND, limit_weight)
         per_frame = np.nanmean(fit.residual, axis=1)
         per_joint = np.nanmean(fit.residual, axis=0)
         worst = skeleton.joints[int(np.nanargmax(per_joint))]
@@ -237,7 +235,7 @@ def glove(limit_weight: float = 0.0) -> None:
               f"(every {GLOVE_STEP}rd): visible residual mean {np.nanmean(fit.residual):.1f} "
               f"mm, per frame median {np.nanmedian(per_frame):.1f}, 95th pct "
               f"{np.nanpercentile(per_frame, 95):.1f}; worst joint {worst} "
-              f"{np.nanmax(per_joint):.1f} mm; {GLOVE_CLIP_FRAMES / seconds:.1f} frames/s")
+              f"{np.nanmax(per_joint):.1f} mm; {rate:.1f} frames/s")
     pooled = np.concatenate(residuals)
     per_frame = np.nanmean(pooled, axis=1)
     print(f"glove, {len(pooled)} frames: visible residual mean {np.nanmean(pooled):.1f} mm, "

@@ -262,23 +262,15 @@ def _least_excess(rays, t, joint, x, y, z, children, first_child, bone_lengths, 
     for i in range(first_child[joint], first_child[joint + 1]):
         child = children[i]
         rx, ry, rz = rays[t, child, 0], rays[t, child, 1], rays[t, child, 2]
-        length = bone_lengths[child]
-        a = rx * rx + ry * ry + rz * rz
-        b = rx * x + ry * y + rz * z
-        nearest = b / a
-        miss_sq = max(x * x + y * y + z * z - b * nearest, 0.0)
-        excess = max(math.sqrt(miss_sq) - length, 0.0)
+        far, near, excess = ray_solutions(rays, t, child, x, y, z, bone_lengths[child])
         if math.isnan(excess):
             continue
         total += excess
         if total > budget:
             return total
-        half_chord = math.sqrt(max(length * length - miss_sq, 0.0) / a)
-        far = nearest + half_chord
         below = _least_excess(rays, t, child, rx * far, ry * far, rz * far, children,
                               first_child, bone_lengths, budget - total)
-        if half_chord > 0.0 and below > 0.0:
-            near = nearest - half_chord
+        if far > near and below > 0.0:
             below = min(below, _least_excess(rays, t, child, rx * near, ry * near, rz * near,
                                              children, first_child, bone_lengths,
                                              min(budget - total, below)))
