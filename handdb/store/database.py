@@ -75,6 +75,12 @@ _WINDOWS_LOCK_SPAN = 1 << 20
 PARQUET_SUFFIX = ".parquet"
 TMP_SUFFIX = ".tmp"
 
+#: How long a refused build waits for the lock's holder to write who it is: the holder
+#: writes its pid just after it takes the lock, so a build refused in between would read
+#: an empty file.
+_HOLDER_WAIT_S = 0.5
+_HOLDER_POLL_S = 0.01
+
 #: ``os.open`` flag that refuses a symbolic link as the last part of a path (none on Windows,
 #: where the lock file is checked before it is opened).
 _NO_FOLLOW = getattr(os, "O_NOFOLLOW", 0)
@@ -113,6 +119,17 @@ def _try_lock(fh) -> bool:
     except BlockingIOError:
         return False
     return True
+
+
+def _lock_holder(fh) -> str:
+    """Who holds the lock on ``fh``, as its holder wrote it ("pid N on host")."""
+    deadline = time.monotonic() + _HOLDER_WAIT_S
+    while True:
+        fh.seek(0)
+        holder = fh.read().strip()
+        if holder or time.monotonic() >= deadline:
+            return holder or "another process"
+        time.sleep(_HOLDER_POLL_S)
 
 
 def _unlock(fh) -> None:
@@ -541,8 +558,7 @@ class Store:
                 ) from None
             with os.fdopen(descriptor, "r+") as fh:
                 if not _try_lock(fh):
-                    fh.seek(0)
-                    holder = fh.read().strip() or "another process"
+                    holder = _lock_holder(fh)
                     raise DatabaseLockedError(
                         f"database {self.url} is being built by {holder}; wait for that "
                         "build to finish, then run again"

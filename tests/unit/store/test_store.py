@@ -1,4 +1,6 @@
 import multiprocessing
+import sys
+import threading
 from importlib import import_module
 
 import pyarrow.parquet as pq
@@ -6,7 +8,7 @@ import pytest
 
 from handdb.errors import DatabaseLockedError, SchemaError, StoreError
 from handdb.store import tables
-from handdb.store.database import CLIP_TABLES, Store
+from handdb.store.database import CLIP_TABLES, LOCK_FILE, Store
 from handdb.store.query import connect, query
 from tests.support.store_rows import clip_row, truth_rows
 
@@ -85,6 +87,27 @@ def test_second_builder_gets_a_clear_message(tmp_path):
         holder.join(30)
     with Store(url).lock():  # released when the holder ended
         pass
+
+
+@pytest.mark.skipif(sys.platform == "win32", reason="flock is POSIX")
+def test_a_builder_refused_before_the_holder_wrote_its_pid_still_names_it(tmp_path):
+    """The holder takes the lock, then writes who it is; a build refused in between waits."""
+    import fcntl
+
+    url = str(tmp_path / "db")
+    with Store(url).lock():
+        pass  # creates the database folder and its lock file
+    lock_path = tmp_path / "db" / LOCK_FILE
+    with open(lock_path, "r+") as held:
+        fcntl.flock(held, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        writer = threading.Timer(0.05, lambda: lock_path.write_text("pid 4242 on elsewhere"))
+        writer.start()
+        try:
+            with pytest.raises(DatabaseLockedError, match="being built by pid 4242 on elsewhere"):
+                with Store(url).lock():
+                    pass
+        finally:
+            writer.join()
 
 
 def test_lock_is_released_when_the_holder_is_killed(tmp_path):
