@@ -19,7 +19,7 @@ import numpy as np
 import pyarrow as pa
 
 from handdb.build.options import BuildOptions
-from handdb.clip import Clip
+from handdb.clip import Clip, finite_points
 from handdb.errors import (
     ClipDataError,
     HanddbError,
@@ -281,7 +281,7 @@ def export(result: ClipResult, store: Store, options: BuildOptions) -> ClipResul
     bones = _needs(result.bones, "bone lengths", result)
     if not options.export_usd:
         return result
-    unplaced = ~np.isfinite(lifted.xyz).all(axis=-1)                       # (T, J)
+    unplaced = ~finite_points(lifted.xyz)                       # (T, J)
     if unplaced.any():
         result = _flag_unplaced(result, unplaced)
         if unplaced.any(axis=1).all():

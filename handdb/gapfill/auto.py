@@ -52,6 +52,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
+from handdb.clip import finite_points
 from handdb.compiled import kernel
 from handdb.denoise import denoise
 from handdb.errors import GapFillError, ParameterError
@@ -622,7 +623,7 @@ def _fill_track(
     placed = (place_from_rest_pose(smoothed, missing, skeleton, never_seen) if never_seen.size
               else smoothed)
     placed, on_chords = place_on_chords(placed, missing, skeleton, never_seen)
-    unknown = missing & ~np.isfinite(placed).all(axis=-1)
+    unknown = missing & ~finite_points(placed)
     motion = palm_motion(smoothed, missing, skeleton)
     local = placed if motion is None else to_palm_frame(placed, motion)
 

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from handdb.clip import finite_points
 from handdb.gapfill.auto import MODEL_RULES
 from handdb.gapfill.gaps import find_gaps
 from handdb.gapfill.registry import FillResult
@@ -49,7 +50,7 @@ def never_detected(result: FillResult) -> np.ndarray:
     Read from the arrays, not the fill's notes, so a fill read back from the store (which
     keeps no notes) says the same.
     """
-    observed = ~result.filled & np.isfinite(result.uv).all(axis=-1)
+    observed = ~result.filled & finite_points(result.uv)
     return ~observed.any(axis=0)
 
 

@@ -14,7 +14,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from handdb.clip import IMAGES, SAMPLINGS, VIDEO
+from handdb.clip import IMAGES, SAMPLINGS, VIDEO, finite_points
 from handdb.errors import GapFillError
 from handdb.gapfill.gaps import find_gaps, mask_points
 from handdb.gapfill.methods import DEFAULT_METHOD, METHODS, MethodInfo
@@ -218,7 +218,7 @@ def fill_gaps(
               else _fill_each_image(info, hidden, missing, skeleton, params))
     filled_uv = uv.copy()
     filled_uv[frame, joint] = output.uv[frame, joint]
-    done = np.isfinite(filled_uv[frame, joint]).all(axis=-1)
+    done = finite_points(filled_uv[frame, joint])
     frame, joint = frame[done], joint[done]
     filled = np.zeros_like(missing)
     filled[frame, joint] = True
