@@ -13,12 +13,15 @@ import tempfile
 import time
 from pathlib import Path
 
-from handdb.export.bvh import export_clip_bvh
-from handdb.export.mesh import hand_mesh, posed_vertices
-from handdb.export.rotations import joint_rotations
-from handdb.export.usd import export_clip_usd
-from handdb.hand.skeletons import bone_length_array, load_skeleton
-from handdb.synthetic import synthesize_clip
+REPO = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(REPO))  # this checkout's handdb, before any installed copy
+
+from handdb.export.bvh import export_clip_bvh  # noqa: E402
+from handdb.export.mesh import hand_mesh, posed_vertices  # noqa: E402
+from handdb.export.rotations import joint_rotations  # noqa: E402
+from handdb.export.usd import export_clip_usd  # noqa: E402
+from handdb.hand.skeletons import bone_length_array, load_skeleton  # noqa: E402
+from handdb.synthetic import synthesize_clip  # noqa: E402
 
 SKINNED_FRAMES = 1000
 

@@ -21,11 +21,14 @@ import time
 from collections.abc import Callable
 from pathlib import Path
 
-from handdb.export import FORMATS
-from handdb.export.fbx import FbxConversion, convert_to_fbx, stage_gltf
-from handdb.export.formats import ExportOptions
-from handdb.export.stored import placed_motion, read_stored_motion
-from handdb.store.database import Store
+REPO = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(REPO))  # this checkout's handdb, before any installed copy
+
+from handdb.export import FORMATS  # noqa: E402
+from handdb.export.fbx import FbxConversion, convert_to_fbx, stage_gltf  # noqa: E402
+from handdb.export.formats import ExportOptions  # noqa: E402
+from handdb.export.stored import placed_motion, read_stored_motion  # noqa: E402
+from handdb.store.database import Store  # noqa: E402
 
 #: Clips of the larger batch.
 CLIPS = 4

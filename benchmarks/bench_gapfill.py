@@ -22,24 +22,28 @@ from __future__ import annotations
 
 import argparse
 import os
+import sys
 import time
 from pathlib import Path
 
 import numpy as np
 
-from handdb.gapfill import DEFAULT_METHOD, METHODS, THESIS, fill_gaps, method_names
-from handdb.gapfill.evaluate import (
+REPO = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(REPO))  # this checkout's handdb, before any installed copy
+
+from handdb.gapfill import DEFAULT_METHOD, METHODS, THESIS, fill_gaps, method_names  # noqa: E402
+from handdb.gapfill.evaluate import (  # noqa: E402
     OCCLUSION_MASK,
     RANDOM_MASK,
     THESIS_MASK,
     evaluate_clip,
     overall_rmse,
 )
-from handdb.gapfill.masks import RANDOM_GAP_FRAMES, random_gaps_mask
-from handdb.hand.skeletons import load_skeleton
-from handdb.synthetic.clips import synthesize_clip
+from handdb.gapfill.masks import RANDOM_GAP_FRAMES, random_gaps_mask  # noqa: E402
+from handdb.hand.skeletons import load_skeleton  # noqa: E402
+from handdb.synthetic.clips import synthesize_clip  # noqa: E402
 
-DHG = Path(__file__).resolve().parents[1] / ".." / "shared" / "data" / "dhg-sample"
+DHG = REPO / ".." / "shared" / "data" / "dhg-sample"
 MM_PER_M = 1000.0
 MASKS = (THESIS_MASK, RANDOM_MASK)
 #: Clip lengths (frames) the default's speed is measured on.

@@ -17,11 +17,14 @@ from pathlib import Path
 
 import numpy as np
 
-from handdb.export.preview import write_preview_png
-from handdb.export.thumbnail import write_thumbnail_png
-from handdb.hand.skeletons import load_skeleton
-from handdb.synthetic import synthesize_clip
-from handdb.validation.depth import comparison_chart, validation_table
+REPO = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(REPO))  # this checkout's handdb, before any installed copy
+
+from handdb.export.preview import write_preview_png  # noqa: E402
+from handdb.export.thumbnail import write_thumbnail_png  # noqa: E402
+from handdb.hand.skeletons import load_skeleton  # noqa: E402
+from handdb.synthetic import synthesize_clip  # noqa: E402
+from handdb.validation.depth import comparison_chart, validation_table  # noqa: E402
 
 CLIP_FRAMES = (300, 20_000)
 REPEATS = 3

@@ -29,21 +29,25 @@ Run: ``.venv/bin/python benchmarks/bench_lengths.py``.
 from __future__ import annotations
 
 import json
+import sys
 import tempfile
 from pathlib import Path
 
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from handdb.clip import Clip
-from handdb.hand.model import build_hand_model
-from handdb.hand.skeletons import Skeleton, frame_bone_lengths, load_skeleton
-from handdb.ingest.sidecar import parse_sidecar
-from handdb.lengths.bone_lengths import clip_bone_lengths
-from handdb.lengths.estimate import reference_frame_lengths
-from handdb.synthetic import make_motion, project_pinhole, render_clip, synthesize_clip
+REPO = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(REPO))  # this checkout's handdb, before any installed copy
 
-SHARED = Path(__file__).resolve().parents[1] / ".." / "shared" / "data"
+from handdb.clip import Clip  # noqa: E402
+from handdb.hand.model import build_hand_model  # noqa: E402
+from handdb.hand.skeletons import Skeleton, frame_bone_lengths, load_skeleton  # noqa: E402
+from handdb.ingest.sidecar import parse_sidecar  # noqa: E402
+from handdb.lengths.bone_lengths import clip_bone_lengths  # noqa: E402
+from handdb.lengths.estimate import reference_frame_lengths  # noqa: E402
+from handdb.synthetic import make_motion, project_pinhole, render_clip, synthesize_clip  # noqa: E402
+
+SHARED = REPO / ".." / "shared" / "data"
 DHG = SHARED / "dhg-sample" / "skeletons_world.txt"
 INTERHAND = SHARED / "real-tools" / "interhand" / "test_interhand2.6m_joint_3d.json"
 

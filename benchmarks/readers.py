@@ -16,9 +16,12 @@ from pathlib import Path
 
 import numpy as np
 
-from handdb.hand.skeletons import load_skeleton
-from handdb.ingest import dlc, maya, openpose, tracks_csv
-from handdb.ingest.sidecar import parse_sidecar
+REPO = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(REPO))  # this checkout's handdb, before any installed copy
+
+from handdb.hand.skeletons import load_skeleton  # noqa: E402
+from handdb.ingest import dlc, maya, openpose, tracks_csv  # noqa: E402
+from handdb.ingest.sidecar import parse_sidecar  # noqa: E402
 
 SIDECAR = {"hand": "right", "fps": 30, "subject": "bench", "units": "mm",
            "camera": {"model": "orthographic"}}

@@ -10,9 +10,13 @@ from __future__ import annotations
 
 import sys
 import time
+from pathlib import Path
 
-from handdb.hand.model import forward_kinematics
-from handdb.synthetic import MOTIONS, make_hand, make_motion, model_poses, synthesize_clip
+REPO = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(REPO))  # this checkout's handdb, before any installed copy
+
+from handdb.hand.model import forward_kinematics  # noqa: E402
+from handdb.synthetic import MOTIONS, make_hand, make_motion, model_poses, synthesize_clip  # noqa: E402
 
 
 def frames_per_second(call, n_frames: int, repeats: int = 3) -> float:
