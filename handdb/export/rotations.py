@@ -207,7 +207,8 @@ def joint_frames(xyz: np.ndarray, skeleton: Skeleton) -> np.ndarray:
     if len(aiming):
         hints = np.stack([hinge_axes.get(skeleton.fingers[joint], palm[..., 0])
                           for joint in aiming], axis=1)                    # (T, K, 3)
-        bones = xyz[:, [skeleton.children(j)[0] for j in aiming]] - xyz[:, aiming]
+        children = np.array([skeleton.children(int(j))[0] for j in aiming], dtype=np.intp)
+        bones = xyz[:, children] - xyz[:, aiming]
         fallback = np.broadcast_to(palm[:, None, :, 2], bones.shape)
         frames[:, aiming] = _frame_from_axes(hints, bones, fallback)
     frames[:, counts > 1] = palm[:, None]
