@@ -185,12 +185,18 @@ def envelope_lengths(projected: np.ndarray, scale: np.ndarray) -> Estimate:
     ratio = running_median(projected / scale[:, None], JITTER_FRAMES)
     n = projected.shape[1]
     lengths, spread = np.full(n, np.nan), np.full(n, np.nan)
-    seen = np.isfinite(ratio).sum(axis=0)
-    for j in np.flatnonzero(seen >= MIN_ENVELOPE_FRAMES):
-        values = ratio[np.isfinite(ratio[:, j]), j]
-        low, high, lengths[j] = np.percentile(values, [*ENVELOPE_GAP_PERCENTILES,
-                                                       ENVELOPE_PERCENTILE])
-        spread[j] = ENVELOPE_SPREAD_FLOOR + (high - low) / lengths[j] / 2.0
+    finite = np.isfinite(ratio)
+    seen = finite.sum(axis=0)
+    # each bone's seen values first, ascending (NaN sorts last): the bones seen in as many
+    # frames share one percentile call, which takes the same order statistics as one
+    # call per bone on its seen values
+    ordered = np.sort(np.where(finite, ratio, np.nan), axis=0)
+    bones = np.flatnonzero(seen >= MIN_ENVELOPE_FRAMES)
+    for count in np.unique(seen[bones]):
+        group = bones[seen[bones] == count]
+        low, high, lengths[group] = np.percentile(
+            ordered[:count, group], [*ENVELOPE_GAP_PERCENTILES, ENVELOPE_PERCENTILE], axis=0)
+        spread[group] = ENVELOPE_SPREAD_FLOOR + (high - low) / lengths[group] / 2.0
     return Estimate(lengths, spread, np.where(np.isfinite(lengths), seen, 0))
 
 
