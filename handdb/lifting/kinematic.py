@@ -53,7 +53,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from handdb.clip import Camera
+from handdb.clip import Camera, finite_points
 from handdb.denoise import denoise
 from handdb.hand.layout import HandLayout
 from handdb.hand.skeletons import Skeleton
@@ -532,7 +532,7 @@ def lift_kinematic(uv: np.ndarray, skeleton: Skeleton, bone_lengths: np.ndarray,
     Parameters are those of :func:`handdb.lifting.lift`.
     """
     parts = palm_parts(skeleton)
-    uv = denoise(uv, ~np.isfinite(uv).all(axis=-1))[0]
+    uv = denoise(uv, ~finite_points(uv))[0]
     image = centred_pixels(uv, camera)
     projected = projected_lengths(image, skeleton)
     scale = smooth_scale(eq6_scale(projected, bone_lengths, rank=SCALE_RANK))
