@@ -81,6 +81,7 @@ from handdb.lifting.pinhole import camera_rays, estimate_root_depth, ray_roots
 from handdb.lifting.result import LiftResult
 from handdb.lifting.settle import (
     TEMPORAL_FLOOR,
+    VOTE_FIELDS,
     Case,
     Settled,
     Votes,
@@ -106,6 +107,11 @@ MIN_CONFIDENCE, MAX_CONFIDENCE = 0.5, 1.0
 
 #: The mirror image through the image plane, ``z -> -z``.
 MIRROR = np.array([1.0, 1.0, -1.0])
+
+#: Frames whose perspective candidates are built and scored at once: the candidates take
+#: about 4 kB a frame, so a long clip's in one piece would be hundreds of MB of fresh
+#: memory, each page faulted in, where blocks of this many frames reuse a few MB.
+CANDIDATE_BLOCK_FRAMES = 4096
 
 
 @dataclass(frozen=True)
@@ -266,6 +272,31 @@ def _orthographic_hypotheses(states: PalmStates, xy: np.ndarray, abs_dz: np.ndar
                               None if thumb is None else thumb[::-1] * MIRROR)]
 
 
+def _perspective_votes(rays: np.ndarray, palm: np.ndarray, bone_lengths: np.ndarray,
+                       layout: HandLayout, hand: str) -> Votes:
+    """The hand prior's votes on the fingers of ``layout`` through a pinhole.
+
+    :func:`~handdb.lifting.hand_prior.score_fingers` of the
+    :func:`~handdb.lifting.finger_geometry.perspective_candidates` of ``rays`` ``(T, J, 3)``
+    and ``palm`` ``(T, 2, J, 3)`` (clip units), frame by frame as they are, built in
+    blocks of :data:`CANDIDATE_BLOCK_FRAMES` frames.
+    """
+    blocks = [votes_of(score_fingers(perspective_candidates(rays[start:stop], palm[start:stop],
+                                                            bone_lengths, layout),
+                                     bone_lengths, layout, hand))
+              for start, stop in _blocks(len(rays))]
+    if len(blocks) == 1:
+        return blocks[0]
+    return Votes(*(np.concatenate([getattr(block, name) for block in blocks])
+                   for name in VOTE_FIELDS))
+
+
+def _blocks(n_frames: int) -> list[tuple[int, int]]:
+    """``(start, stop)`` of consecutive blocks of :data:`CANDIDATE_BLOCK_FRAMES` frames."""
+    starts = range(0, max(n_frames, 1), CANDIDATE_BLOCK_FRAMES)
+    return [(start, min(start + CANDIDATE_BLOCK_FRAMES, n_frames)) for start in starts]
+
+
 def _pinhole_hypotheses(states: PalmStates, rays: np.ndarray, skeleton: Skeleton,
                         parts: PalmParts, bone_lengths: np.ndarray, hand: str) -> Hypotheses:
     """The case of palm states on the rays: the thumb base at its far or near solution.
@@ -276,9 +307,8 @@ def _pinhole_hypotheses(states: PalmStates, rays: np.ndarray, skeleton: Skeleton
     palm, layout = states.points, parts.layout
     depth = palm[:, :, parts.joints, 2] - palm[:, :, skeleton.root, None, 2]
     if parts.thumb_base < 0:
-        candidates = perspective_candidates(rays, palm, bone_lengths, layout)
-        others, thumb_votes = _split(votes_of(score_fingers(candidates, bone_lengths, layout,
-                                                            hand)), None)
+        others, thumb_votes = _split(_perspective_votes(rays, palm, bone_lengths, layout,
+                                                        hand), None)
         return Hypotheses(Case(depth=depth, evidence=states.evidence, others=others,
                                thumb=thumb_votes, thumb_dz=None, heights=None, mirrored=True),
                           palm, None)
@@ -289,10 +319,8 @@ def _pinhole_hypotheses(states: PalmStates, rays: np.ndarray, skeleton: Skeleton
     apart = _with_thumb(palm, thumb, np.array([0, 1]), base)
     crossed = _with_thumb(palm, thumb, np.array([1, 0]), base)
     alone = thumb_only(layout)
-    full = votes_of(score_fingers(perspective_candidates(rays, apart, bone_lengths, layout),
-                                  bone_lengths, layout, hand))
-    other = votes_of(score_fingers(perspective_candidates(rays, crossed, bone_lengths, alone),
-                                   bone_lengths, alone, hand))
+    full = _perspective_votes(rays, apart, bone_lengths, layout, hand)
+    other = _perspective_votes(rays, crossed, bone_lengths, alone, hand)
     others, thumb_votes = _split(full, other)
     thumb_dz, heights = _geometry(palm, thumb, parts, hand, palm_size(skeleton, bone_lengths))
     return Hypotheses(Case(depth=depth, evidence=states.evidence, others=others,
