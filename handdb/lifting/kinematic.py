@@ -49,6 +49,7 @@ and ``benchmarks/RESULTS-lifting.md``.
 from __future__ import annotations
 
 import dataclasses
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -112,6 +113,9 @@ MIRROR = np.array([1.0, 1.0, -1.0])
 #: about 4 kB a frame, so a long clip's in one piece would be hundreds of MB of fresh
 #: memory, each page faulted in, where blocks of this many frames reuse a few MB.
 CANDIDATE_BLOCK_FRAMES = 4096
+
+#: The perspective candidates of the frames ``start:stop`` of a clip.
+CandidateBlock = Callable[[int, int], FingerCandidates]
 
 
 @dataclass(frozen=True)
@@ -408,12 +412,22 @@ def _chain_depths(candidates: FingerCandidates | None, state: np.ndarray, best: 
     return depths.reshape(n_frames, -1, 2, 1)
 
 
-def _finger_odds(hyp: Hypotheses, settled: Settled, candidates: FingerCandidates | None,
+def _finger_odds(hyp: Hypotheses, settled: Settled, candidates: CandidateBlock | None,
                  abs_dz: np.ndarray, parts: PalmParts, bone_lengths: np.ndarray) -> np.ndarray:
-    """Posterior log-odds of every finger bone's sign under the chosen tilt, ``(T, F, 3)``."""
+    """Posterior log-odds of every finger bone's sign under the chosen tilt, ``(T, F, 3)``.
+
+    ``candidates`` gives a pinhole clip's candidates block by block (``None``
+    orthographically).
+    """
     layout = parts.layout
     bone_log_odds, best = chosen_votes(hyp.case, settled)
-    chain_dz = _chain_depths(candidates, settled.state, best, abs_dz, layout)
+    if candidates is None:
+        chain_dz = _chain_depths(None, settled.state, best, abs_dz, layout)
+    else:
+        chain_dz = np.concatenate([
+            _chain_depths(candidates(start, stop), settled.state[start:stop], best[start:stop],
+                          abs_dz[start:stop], layout)
+            for start, stop in _blocks(len(best))])
     return finger_signs(bone_log_odds, chain_dz,
                         TEMPORAL_FLOOR * bone_lengths[layout.chains].ravel())
 
@@ -463,15 +477,30 @@ def _orthographic_depths(solution: Solution, abs_dz: np.ndarray, skeleton: Skele
     return accumulate_depths(dz, skeleton)
 
 
-def _pinhole_points(solution: Solution, candidates: FingerCandidates,
+def _pinhole_points(solution: Solution, candidates: CandidateBlock,
                     layout: HandLayout) -> np.ndarray:
-    """Joint positions of a pinhole solution, picked from its candidates, ``(T, J, 3)``."""
+    """Joint positions of a pinhole solution, picked from its candidates, ``(T, J, 3)``.
+
+    ``candidates`` gives them block by block (:data:`CANDIDATE_BLOCK_FRAMES`).
+    """
+    state, odds = solution.settled.state, solution.finger_odds
+    return np.concatenate([_picked_points(state[start:stop], odds[start:stop],
+                                          candidates(start, stop), layout)
+                           for start, stop in _blocks(len(state))])
+
+
+def _picked_points(state: np.ndarray, finger_odds: np.ndarray, candidates: FingerCandidates,
+                   layout: HandLayout) -> np.ndarray:
+    """Joint positions ``(T, J, 3)`` picked from ``candidates`` of the same ``T`` frames.
+
+    ``state`` ``(T,)`` is each frame's palm state, ``finger_odds`` ``(T, F, 3)`` each
+    finger bone's log-odds of the positive sign.
+    """
     if candidates.palm is None or candidates.joints is None:
         raise ValueError("positions can only be picked from perspective candidates")
-    state = solution.settled.state
     frames = np.arange(len(state))
     xyz = candidates.palm[frames, state].copy()
-    pick = (solution.finger_odds < 0).astype(np.int64)                   # (T, F, 3)
+    pick = (finger_odds < 0).astype(np.int64)                            # (T, F, 3)
     frame, finger = frames[:, None], np.arange(len(layout.fingers))[None, :]
     first, second, third = candidates.joints
     own = state[:, None]
@@ -541,8 +570,12 @@ def _lift_pinhole(uv: np.ndarray, skeleton: Skeleton, bone_lengths: np.ndarray,
                                       rays, skeleton, parts, bone_lengths, hand)
                   for plane in planes]
     hyp, settled, odds = _choose(hypotheses, parts, bone_lengths)
-    candidates = perspective_candidates(rays, _chosen_palm(hyp, settled, parts), bone_lengths,
-                                        parts.layout)
+    palm = _chosen_palm(hyp, settled, parts)
+
+    def candidates(start: int, stop: int) -> FingerCandidates:
+        return perspective_candidates(rays[start:stop], palm[start:stop], bone_lengths,
+                                      parts.layout)
+
     solution = Solution(hyp, settled, _finger_odds(hyp, settled, candidates, abs_dz, parts,
                                                    bone_lengths), odds)
     xyz = _pinhole_points(solution, candidates, parts.layout)
