@@ -276,16 +276,17 @@ def _orthographic_hypotheses(states: PalmStates, xy: np.ndarray, abs_dz: np.ndar
                               None if thumb is None else thumb[::-1] * MIRROR)]
 
 
-def _perspective_votes(rays: np.ndarray, palm: np.ndarray, bone_lengths: np.ndarray,
-                       layout: HandLayout, hand: str) -> Votes:
+def _perspective_votes(rays: np.ndarray, palm: Callable[[int, int], np.ndarray],
+                       bone_lengths: np.ndarray, layout: HandLayout, hand: str) -> Votes:
     """The hand prior's votes on the fingers of ``layout`` through a pinhole.
 
     :func:`~handdb.lifting.hand_prior.score_fingers` of the
     :func:`~handdb.lifting.finger_geometry.perspective_candidates` of ``rays`` ``(T, J, 3)``
-    and ``palm`` ``(T, 2, J, 3)`` (clip units), frame by frame as they are, built in
-    blocks of :data:`CANDIDATE_BLOCK_FRAMES` frames.
+    and the palm, frame by frame as they are, built in blocks of
+    :data:`CANDIDATE_BLOCK_FRAMES` frames; ``palm(start, stop)`` gives the block's palm
+    ``(stop - start, 2, J, 3)``, clip units.
     """
-    blocks = [votes_of(score_fingers(perspective_candidates(rays[start:stop], palm[start:stop],
+    blocks = [votes_of(score_fingers(perspective_candidates(rays[start:stop], palm(start, stop),
                                                             bone_lengths, layout),
                                      bone_lengths, layout, hand))
               for start, stop in _blocks(len(rays))]
@@ -311,8 +312,9 @@ def _pinhole_hypotheses(states: PalmStates, rays: np.ndarray, skeleton: Skeleton
     palm, layout = states.points, parts.layout
     depth = palm[:, :, parts.joints, 2] - palm[:, :, skeleton.root, None, 2]
     if parts.thumb_base < 0:
-        others, thumb_votes = _split(_perspective_votes(rays, palm, bone_lengths, layout,
-                                                        hand), None)
+        votes = _perspective_votes(rays, lambda start, stop: palm[start:stop], bone_lengths,
+                                   layout, hand)
+        others, thumb_votes = _split(votes, None)
         return Hypotheses(Case(depth=depth, evidence=states.evidence, others=others,
                                thumb=thumb_votes, thumb_dz=None, heights=None, mirrored=True),
                           palm, None)
@@ -320,8 +322,13 @@ def _pinhole_hypotheses(states: PalmStates, rays: np.ndarray, skeleton: Skeleton
     far, near, _ = ray_roots(palm[:, :, parts.thumb_parent], rays[:, None, base],
                              bone_lengths[base])
     thumb = np.stack([far, near])                                        # (2, T, 2, 3)
-    apart = _with_thumb(palm, thumb, np.array([0, 1]), base)
-    crossed = _with_thumb(palm, thumb, np.array([1, 0]), base)
+
+    def apart(start: int, stop: int) -> np.ndarray:
+        return _with_thumb(palm[start:stop], thumb[:, start:stop], np.array([0, 1]), base)
+
+    def crossed(start: int, stop: int) -> np.ndarray:
+        return _with_thumb(palm[start:stop], thumb[:, start:stop], np.array([1, 0]), base)
+
     alone = thumb_only(layout)
     full = _perspective_votes(rays, apart, bone_lengths, layout, hand)
     other = _perspective_votes(rays, crossed, bone_lengths, alone, hand)
