@@ -13,15 +13,20 @@ Run: ``.venv/bin/python benchmarks/bench_lifting.py``.
 from __future__ import annotations
 
 import os
+import sys
 import time
 from concurrent.futures import ThreadPoolExecutor
+from pathlib import Path
 
 import numpy as np
 
-from handdb.clip import Camera
-from handdb.hand.skeletons import bone_length_array, load_skeleton
-from handdb.lifting import available_methods, lift
-from handdb.synthetic.clips import synthesize_clip
+REPO = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(REPO))  # this checkout's handdb, before any installed copy
+
+from handdb.clip import Camera  # noqa: E402
+from handdb.hand.skeletons import bone_length_array, load_skeleton  # noqa: E402
+from handdb.lifting import available_methods, lift  # noqa: E402
+from handdb.synthetic.clips import synthesize_clip  # noqa: E402
 
 LENGTHS = (400, 10_000, 100_000)
 

@@ -21,17 +21,20 @@ from pathlib import Path
 
 import numpy as np
 
-from handdb.clip import Camera
-from handdb.hand.skeletons import bone_length_array, load_skeleton
-from handdb.lifting import available_methods, lift
-from handdb.synthetic.clips import synthesize_clip, thesis_clench_clip
-from handdb.validation.depth import clip_summary, joint_errors, validation_table
+REPO = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(REPO))  # this checkout's handdb, before any installed copy
+sys.path.insert(1, str(REPO / "benchmarks"))
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
 from bench_lifting import parallel_throughput, throughput_table  # noqa: E402
 
-OUT = Path(__file__).resolve().parent / "RESULTS-lifting.md"
-DHG = Path(__file__).resolve().parents[1] / ".." / "shared" / "data" / "dhg-sample"
+from handdb.clip import Camera  # noqa: E402
+from handdb.hand.skeletons import bone_length_array, load_skeleton  # noqa: E402
+from handdb.lifting import available_methods, lift  # noqa: E402
+from handdb.synthetic.clips import synthesize_clip, thesis_clench_clip  # noqa: E402
+from handdb.validation.depth import clip_summary, joint_errors, validation_table  # noqa: E402
+
+OUT = REPO / "benchmarks" / "RESULTS-lifting.md"
+DHG = REPO / ".." / "shared" / "data" / "dhg-sample"
 SEEDS = (0, 1, 2, 3, 4)
 DHG_FOCAL_PX = 500.0
 DHG_PIXELS_PER_M = 1000.0

@@ -49,11 +49,12 @@ and ``benchmarks/RESULTS-lifting.md``.
 from __future__ import annotations
 
 import dataclasses
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
 
-from handdb.clip import Camera
+from handdb.clip import Camera, finite_points
 from handdb.denoise import denoise
 from handdb.hand.layout import HandLayout
 from handdb.hand.skeletons import Skeleton
@@ -81,6 +82,7 @@ from handdb.lifting.pinhole import camera_rays, estimate_root_depth, ray_roots
 from handdb.lifting.result import LiftResult
 from handdb.lifting.settle import (
     TEMPORAL_FLOOR,
+    VOTE_FIELDS,
     Case,
     Settled,
     Votes,
@@ -106,6 +108,14 @@ MIN_CONFIDENCE, MAX_CONFIDENCE = 0.5, 1.0
 
 #: The mirror image through the image plane, ``z -> -z``.
 MIRROR = np.array([1.0, 1.0, -1.0])
+
+#: Frames whose perspective candidates are built and scored at once: the candidates take
+#: about 4 kB a frame, so a long clip's in one piece would be hundreds of MB of fresh
+#: memory, each page faulted in, where blocks of this many frames reuse a few MB.
+CANDIDATE_BLOCK_FRAMES = 4096
+
+#: The perspective candidates of the frames ``start:stop`` of a clip.
+CandidateBlock = Callable[[int, int], FingerCandidates]
 
 
 @dataclass(frozen=True)
@@ -266,6 +276,32 @@ def _orthographic_hypotheses(states: PalmStates, xy: np.ndarray, abs_dz: np.ndar
                               None if thumb is None else thumb[::-1] * MIRROR)]
 
 
+def _perspective_votes(rays: np.ndarray, palm: Callable[[int, int], np.ndarray],
+                       bone_lengths: np.ndarray, layout: HandLayout, hand: str) -> Votes:
+    """The hand prior's votes on the fingers of ``layout`` through a pinhole.
+
+    :func:`~handdb.lifting.hand_prior.score_fingers` of the
+    :func:`~handdb.lifting.finger_geometry.perspective_candidates` of ``rays`` ``(T, J, 3)``
+    and the palm, frame by frame as they are, built in blocks of
+    :data:`CANDIDATE_BLOCK_FRAMES` frames; ``palm(start, stop)`` gives the block's palm
+    ``(stop - start, 2, J, 3)``, clip units.
+    """
+    blocks = [votes_of(score_fingers(perspective_candidates(rays[start:stop], palm(start, stop),
+                                                            bone_lengths, layout),
+                                     bone_lengths, layout, hand))
+              for start, stop in _blocks(len(rays))]
+    if len(blocks) == 1:
+        return blocks[0]
+    return Votes(*(np.concatenate([getattr(block, name) for block in blocks])
+                   for name in VOTE_FIELDS))
+
+
+def _blocks(n_frames: int) -> list[tuple[int, int]]:
+    """``(start, stop)`` of consecutive blocks of :data:`CANDIDATE_BLOCK_FRAMES` frames."""
+    starts = range(0, max(n_frames, 1), CANDIDATE_BLOCK_FRAMES)
+    return [(start, min(start + CANDIDATE_BLOCK_FRAMES, n_frames)) for start in starts]
+
+
 def _pinhole_hypotheses(states: PalmStates, rays: np.ndarray, skeleton: Skeleton,
                         parts: PalmParts, bone_lengths: np.ndarray, hand: str) -> Hypotheses:
     """The case of palm states on the rays: the thumb base at its far or near solution.
@@ -276,9 +312,9 @@ def _pinhole_hypotheses(states: PalmStates, rays: np.ndarray, skeleton: Skeleton
     palm, layout = states.points, parts.layout
     depth = palm[:, :, parts.joints, 2] - palm[:, :, skeleton.root, None, 2]
     if parts.thumb_base < 0:
-        candidates = perspective_candidates(rays, palm, bone_lengths, layout)
-        others, thumb_votes = _split(votes_of(score_fingers(candidates, bone_lengths, layout,
-                                                            hand)), None)
+        votes = _perspective_votes(rays, lambda start, stop: palm[start:stop], bone_lengths,
+                                   layout, hand)
+        others, thumb_votes = _split(votes, None)
         return Hypotheses(Case(depth=depth, evidence=states.evidence, others=others,
                                thumb=thumb_votes, thumb_dz=None, heights=None, mirrored=True),
                           palm, None)
@@ -286,13 +322,16 @@ def _pinhole_hypotheses(states: PalmStates, rays: np.ndarray, skeleton: Skeleton
     far, near, _ = ray_roots(palm[:, :, parts.thumb_parent], rays[:, None, base],
                              bone_lengths[base])
     thumb = np.stack([far, near])                                        # (2, T, 2, 3)
-    apart = _with_thumb(palm, thumb, np.array([0, 1]), base)
-    crossed = _with_thumb(palm, thumb, np.array([1, 0]), base)
+
+    def apart(start: int, stop: int) -> np.ndarray:
+        return _with_thumb(palm[start:stop], thumb[:, start:stop], np.array([0, 1]), base)
+
+    def crossed(start: int, stop: int) -> np.ndarray:
+        return _with_thumb(palm[start:stop], thumb[:, start:stop], np.array([1, 0]), base)
+
     alone = thumb_only(layout)
-    full = votes_of(score_fingers(perspective_candidates(rays, apart, bone_lengths, layout),
-                                  bone_lengths, layout, hand))
-    other = votes_of(score_fingers(perspective_candidates(rays, crossed, bone_lengths, alone),
-                                   bone_lengths, alone, hand))
+    full = _perspective_votes(rays, apart, bone_lengths, layout, hand)
+    other = _perspective_votes(rays, crossed, bone_lengths, alone, hand)
     others, thumb_votes = _split(full, other)
     thumb_dz, heights = _geometry(palm, thumb, parts, hand, palm_size(skeleton, bone_lengths))
     return Hypotheses(Case(depth=depth, evidence=states.evidence, others=others,
@@ -380,12 +419,22 @@ def _chain_depths(candidates: FingerCandidates | None, state: np.ndarray, best: 
     return depths.reshape(n_frames, -1, 2, 1)
 
 
-def _finger_odds(hyp: Hypotheses, settled: Settled, candidates: FingerCandidates | None,
+def _finger_odds(hyp: Hypotheses, settled: Settled, candidates: CandidateBlock | None,
                  abs_dz: np.ndarray, parts: PalmParts, bone_lengths: np.ndarray) -> np.ndarray:
-    """Posterior log-odds of every finger bone's sign under the chosen tilt, ``(T, F, 3)``."""
+    """Posterior log-odds of every finger bone's sign under the chosen tilt, ``(T, F, 3)``.
+
+    ``candidates`` gives a pinhole clip's candidates block by block (``None``
+    orthographically).
+    """
     layout = parts.layout
     bone_log_odds, best = chosen_votes(hyp.case, settled)
-    chain_dz = _chain_depths(candidates, settled.state, best, abs_dz, layout)
+    if candidates is None:
+        chain_dz = _chain_depths(None, settled.state, best, abs_dz, layout)
+    else:
+        chain_dz = np.concatenate([
+            _chain_depths(candidates(start, stop), settled.state[start:stop], best[start:stop],
+                          abs_dz[start:stop], layout)
+            for start, stop in _blocks(len(best))])
     return finger_signs(bone_log_odds, chain_dz,
                         TEMPORAL_FLOOR * bone_lengths[layout.chains].ravel())
 
@@ -435,15 +484,30 @@ def _orthographic_depths(solution: Solution, abs_dz: np.ndarray, skeleton: Skele
     return accumulate_depths(dz, skeleton)
 
 
-def _pinhole_points(solution: Solution, candidates: FingerCandidates,
+def _pinhole_points(solution: Solution, candidates: CandidateBlock,
                     layout: HandLayout) -> np.ndarray:
-    """Joint positions of a pinhole solution, picked from its candidates, ``(T, J, 3)``."""
+    """Joint positions of a pinhole solution, picked from its candidates, ``(T, J, 3)``.
+
+    ``candidates`` gives them block by block (:data:`CANDIDATE_BLOCK_FRAMES`).
+    """
+    state, odds = solution.settled.state, solution.finger_odds
+    return np.concatenate([_picked_points(state[start:stop], odds[start:stop],
+                                          candidates(start, stop), layout)
+                           for start, stop in _blocks(len(state))])
+
+
+def _picked_points(state: np.ndarray, finger_odds: np.ndarray, candidates: FingerCandidates,
+                   layout: HandLayout) -> np.ndarray:
+    """Joint positions ``(T, J, 3)`` picked from ``candidates`` of the same ``T`` frames.
+
+    ``state`` ``(T,)`` is each frame's palm state, ``finger_odds`` ``(T, F, 3)`` each
+    finger bone's log-odds of the positive sign.
+    """
     if candidates.palm is None or candidates.joints is None:
         raise ValueError("positions can only be picked from perspective candidates")
-    state = solution.settled.state
     frames = np.arange(len(state))
     xyz = candidates.palm[frames, state].copy()
-    pick = (solution.finger_odds < 0).astype(np.int64)                   # (T, F, 3)
+    pick = (finger_odds < 0).astype(np.int64)                            # (T, F, 3)
     frame, finger = frames[:, None], np.arange(len(layout.fingers))[None, :]
     first, second, third = candidates.joints
     own = state[:, None]
@@ -513,8 +577,12 @@ def _lift_pinhole(uv: np.ndarray, skeleton: Skeleton, bone_lengths: np.ndarray,
                                       rays, skeleton, parts, bone_lengths, hand)
                   for plane in planes]
     hyp, settled, odds = _choose(hypotheses, parts, bone_lengths)
-    candidates = perspective_candidates(rays, _chosen_palm(hyp, settled, parts), bone_lengths,
-                                        parts.layout)
+    palm = _chosen_palm(hyp, settled, parts)
+
+    def candidates(start: int, stop: int) -> FingerCandidates:
+        return perspective_candidates(rays[start:stop], palm[start:stop], bone_lengths,
+                                      parts.layout)
+
     solution = Solution(hyp, settled, _finger_odds(hyp, settled, candidates, abs_dz, parts,
                                                    bone_lengths), odds)
     xyz = _pinhole_points(solution, candidates, parts.layout)
@@ -532,7 +600,7 @@ def lift_kinematic(uv: np.ndarray, skeleton: Skeleton, bone_lengths: np.ndarray,
     Parameters are those of :func:`handdb.lifting.lift`.
     """
     parts = palm_parts(skeleton)
-    uv = denoise(uv, ~np.isfinite(uv).all(axis=-1))[0]
+    uv = denoise(uv, ~finite_points(uv))[0]
     image = centred_pixels(uv, camera)
     projected = projected_lengths(image, skeleton)
     scale = smooth_scale(eq6_scale(projected, bone_lengths, rank=SCALE_RANK))

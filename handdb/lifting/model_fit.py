@@ -21,7 +21,7 @@ import numpy as np
 from scipy.optimize import least_squares
 from scipy.spatial.transform import Rotation
 
-from handdb.clip import Camera
+from handdb.clip import Camera, finite_points
 from handdb.errors import ClipDataError
 from handdb.hand.anatomy import AXES
 from handdb.hand.model import (
@@ -209,7 +209,7 @@ def fit_2d(uv: np.ndarray, skeleton: Skeleton, bone_lengths: np.ndarray, camera:
     """
     model, k = _model_lengths(skeleton, bone_lengths, hand)
     points = uv
-    seen = np.isfinite(points).all(axis=-1)
+    seen = finite_points(points)
     fitted = np.flatnonzero(seen.sum(axis=1) >= MIN_POINTS)
     if not fitted.size:
         raise ClipDataError(f"no frame has the {MIN_POINTS} image points a model fit needs")

@@ -32,6 +32,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.ndimage import gaussian_filter1d, median_filter
 
+from handdb.clip import finite_points
 from handdb.compiled import kernel
 from handdb.hand.anatomy import MEAN_HAND_LENGTH_MM
 from handdb.hand.layout import HandLayout, hand_layout, palm_normals
@@ -293,7 +294,7 @@ def template_states(image: np.ndarray, scale: np.ndarray, abs_dz: np.ndarray,
     rel = image[:, parts.joints] - image[:, skeleton.root, None]
     palm[:, :, parts.joints, :2] = (rel / pose_scale[:, None, None])[:, None]
     palm[:, :, parts.joints, 2] = depth
-    visible = np.isfinite(points).all(axis=-1).sum(axis=1)
+    visible = finite_points(points).sum(axis=1)
     return PalmStates(points=palm, scale=pose_scale, mirrored=False, template=template,
                       evidence=residual_evidence(tilts.residual[frames, order], visible))
 

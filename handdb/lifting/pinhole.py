@@ -19,7 +19,7 @@ import math
 
 import numpy as np
 
-from handdb.clip import Camera
+from handdb.clip import Camera, finite_points
 from handdb.compiled import kernel
 from handdb.hand.skeletons import Skeleton
 from handdb.lifting.geometry import dot3, intrinsics
@@ -306,6 +306,6 @@ def estimate_root_depth(uv: np.ndarray, skeleton: Skeleton, bone_lengths: np.nda
     focal = 0.5 * (fx + fy)
     rays = camera_rays(uv, camera)
     bound = deepest_feasible_root(rays, focal / weak_scale, skeleton, bone_lengths)
-    bound[~np.isfinite(rays).all(axis=-1).any(axis=-1)] = np.nan
+    bound[~finite_points(rays).any(axis=-1)] = np.nan
     return 1.0 / smooth_scale(1.0 / bound, ROOT_DEPTH_PERCENTILE, ROOT_DEPTH_HALF_WINDOW,
                               ROOT_DEPTH_SMOOTHING_FRAMES)
