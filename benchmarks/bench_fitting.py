@@ -36,17 +36,16 @@ from pathlib import Path
 
 import numpy as np
 
-from handdb.hand.model import forward_kinematics
-from handdb.hand.skeletons import convert_points, load_skeleton
-from handdb.markers.fit import fit_markers
-from handdb.markers.solve import track
-from handdb.synthetic import synthesize_clip
-
 REPO = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(REPO))
+sys.path.insert(0, str(REPO))  # this checkout's handdb, before any installed copy
 
 from gapfill_datasets import GLOVE, GLOVE_MARKERS, GLOVE_STEP, glove_markers  # noqa: E402
 
+from handdb.hand.model import forward_kinematics  # noqa: E402
+from handdb.hand.skeletons import convert_points, load_skeleton  # noqa: E402
+from handdb.markers.fit import fit_markers  # noqa: E402
+from handdb.markers.solve import track  # noqa: E402
+from handdb.synthetic import synthesize_clip  # noqa: E402
 from tests.support.paths import REAL_TOOLS  # noqa: E402
 from tests.support.real_data import load_interhand, pseudo_clip  # noqa: E402
 
