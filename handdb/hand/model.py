@@ -90,11 +90,6 @@ class HandModel:
         side), else ``1``.
     units
         Length unit of ``bone_lengths``.
-    marker_offsets
-        ``(J, 3) float64`` or ``None``: where each joint's marker sits on the skin, in the
-        frame of the bone ending at the joint (``+Y`` along the bone, the root's: the hand
-        frame), length units; ``None`` puts every marker on its joint
-        (:func:`marker_positions`).
     """
 
     skeleton: Skeleton
@@ -110,7 +105,6 @@ class HandModel:
     upper: np.ndarray
     dof_sign: np.ndarray
     units: str = "mm"
-    marker_offsets: np.ndarray | None = None
 
     @property
     def n_joints(self) -> int:
@@ -384,36 +378,6 @@ def forward_kinematics(model: HandModel, pose: np.ndarray,
         positions = positions @ MIRROR_X
         frames = MIRROR_X @ frames @ MIRROR_X
     return (positions, frames) if with_rotations else positions
-
-
-def marker_positions(model: HandModel, pose: np.ndarray,
-                     bone_lengths: np.ndarray | None = None,
-                     rest_directions: np.ndarray | None = None,
-                     marker_offsets: np.ndarray | None = None) -> np.ndarray:
-    """Where poses put each joint's marker: the joint moved by its skin offset.
-
-    Parameters
-    ----------
-    model
-        The hand model.
-    pose, bone_lengths, rest_directions
-        As for :func:`forward_kinematics`.
-    marker_offsets
-        ``(..., J, 3)`` offsets in each joint's bone frame (see :class:`HandModel`),
-        broadcastable against the poses; default the model's.
-
-    Returns
-    -------
-    numpy.ndarray
-        ``(..., J, 3) float64`` marker positions, in the units of the bone lengths; the
-        joints themselves when the model has no offsets and none are given.
-    """
-    offsets = model.marker_offsets if marker_offsets is None else marker_offsets
-    if offsets is None:
-        return forward_kinematics(model, pose, bone_lengths, rest_directions)
-    positions, frames = forward_kinematics(model, pose, bone_lengths, rest_directions,
-                                           with_rotations=True)
-    return positions + (frames @ np.asarray(offsets)[..., None])[..., 0]
 
 
 def joint_frames(model: HandModel, bone_frames: np.ndarray) -> np.ndarray:

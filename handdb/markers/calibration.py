@@ -26,14 +26,14 @@ which the template cannot know. Every length is in millimetres.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 
 import numpy as np
 from scipy.optimize import least_squares
 
 from handdb.checks import mm_per_unit
 from handdb.clip import finite_points
-from handdb.hand.model import N_DOF, HandModel, marker_positions
+from handdb.hand.model import N_DOF, HandModel, forward_kinematics
 from handdb.lengths.bone_lengths import BoneLengths
 from handdb.lengths.ratios import bone_ratios, table1_ratios
 from handdb.markers.solve import SOLVER_TOLERANCE, fit_pose_lsq, initial_pose
@@ -50,14 +50,6 @@ RATIO_PRIOR_WEIGHT = 0.1
 
 #: Weight of the pull of palm bone directions towards the template, per mm² at the joint.
 PALM_PRIOR_WEIGHT = 0.01
-
-#: Weights of the Gaussian prior pulling each marker's skin offset towards its joint, per
-#: mm², across the bone and along it (1 mm of marker error against offsets of standard
-#: deviation 5 and 15 mm): markers sit a few mm off the bone on the skin, but anywhere along
-#: the segment they are stuck to (a glove's finger-middle marker halfway down the phalanx).
-#: Chosen a priori, not fitted to any capture.
-OFFSET_PRIOR_WEIGHT_ACROSS = 1.0 / 5.0 ** 2
-OFFSET_PRIOR_WEIGHT_ALONG = 1.0 / 15.0 ** 2
 
 #: Weight of a calibration pose's excursion beyond the model's joint bounds, mm of marker
 #: error per radian, when asked for: a bone of 50-100 mm turned 1 rad past its bound moves
@@ -164,8 +156,7 @@ class _Problem:
 
     Unknowns: the logarithms of the finger bone lengths (so they stay positive, which LM
     cannot otherwise enforce), each palm joint's offset from the wrist (3 numbers; its
-    length and direction), the skin offset of every marker the frames show (3 numbers, in
-    its bone's frame) and every calibration frame's pose.
+    length and direction) and every calibration frame's pose.
     """
 
     def __init__(self, model: HandModel, markers: np.ndarray,
@@ -190,26 +181,16 @@ class _Problem:
         fingers = np.array(skeleton.fingers)[child]
         self.same_finger = (fingers[self.ratio_bones][:, None] == fingers[None, :]) & np.isin(
             np.arange(len(child)), self.ratio_bones)[None, :]
-        self.marked = np.flatnonzero(self.visible.any(axis=0))
-        self.n_palm_end = len(self.finger_bones) + 3 * len(self.palm)
-        self.n_shape = self.n_palm_end + 3 * len(self.marked)
-        self.offset_prior = np.sqrt([OFFSET_PRIOR_WEIGHT_ACROSS, OFFSET_PRIOR_WEIGHT_ALONG,
-                                     OFFSET_PRIOR_WEIGHT_ACROSS])
+        self.n_shape = len(self.finger_bones) + 3 * len(self.palm)
         self.frame_of_row = np.repeat(np.nonzero(self.visible)[0], 3)
 
-    def pack(self, lengths: np.ndarray, palm: np.ndarray, offsets: np.ndarray,
-             poses: np.ndarray) -> np.ndarray:
-        return np.concatenate([np.log(lengths[self.finger_bones]), palm.ravel(),
-                               offsets[self.marked].ravel(), poses.ravel()])
+    def pack(self, lengths: np.ndarray, palm: np.ndarray, poses: np.ndarray) -> np.ndarray:
+        return np.concatenate([np.log(lengths[self.finger_bones]), palm.ravel(), poses.ravel()])
 
-    def unpack(self, params: np.ndarray
-               ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    def unpack(self, params: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         batch = params.shape[:-1]
         n_fingers = len(self.finger_bones)
-        palm = params[..., n_fingers:self.n_palm_end].reshape(batch + (len(self.palm), 3))
-        offsets = np.zeros(batch + (self.model.n_joints, 3))
-        offsets[..., self.marked, :] = params[..., self.n_palm_end:self.n_shape].reshape(
-            batch + (len(self.marked), 3))
+        palm = params[..., n_fingers:self.n_shape].reshape(batch + (len(self.palm), 3))
         lengths = np.empty(batch + (len(self.model.bone_lengths),))
         lengths[..., self.finger_bones] = np.exp(params[..., :n_fingers])
         lengths[..., self.palm_bones] = np.linalg.norm(palm, axis=-1)
@@ -217,16 +198,15 @@ class _Problem:
                                      batch + self.model.rest_directions.shape).copy()
         directions[..., self.palm, :] = palm / lengths[..., self.palm_bones, None]
         poses = params[..., self.n_shape:].reshape(batch + (self.n_frames, N_DOF))
-        return lengths, directions, offsets, poses
+        return lengths, directions, poses
 
     def residuals(self, params: np.ndarray) -> np.ndarray:
-        lengths, directions, offsets, poses = self.unpack(params)
-        predicted = marker_positions(self.model, poses, lengths[..., None, :],
-                                     directions[..., None, :, :], offsets[..., None, :, :])
-        markers = (predicted[..., self.visible, :] - self.target).reshape(
-            params.shape[:-1] + (-1,))
+        lengths, directions, poses = self.unpack(params)
+        joints = forward_kinematics(self.model, poses, lengths[..., None, :],
+                                    directions[..., None, :, :])
+        markers = (joints[..., self.visible, :] - self.target).reshape(params.shape[:-1] + (-1,))
         pull = np.sqrt(LENGTH_PRIOR_WEIGHT) * (lengths - self.prior_lengths)
-        palm = params[..., len(self.finger_bones):self.n_palm_end].reshape(
+        palm = params[..., len(self.finger_bones):self.n_shape].reshape(
             params.shape[:-1] + (len(self.palm), 3))
         units = palm / np.linalg.norm(palm, axis=-1, keepdims=True)
         bend = np.sqrt(PALM_PRIOR_WEIGHT) * (
@@ -235,16 +215,14 @@ class _Problem:
         shares = lengths[..., self.ratio_bones] / totals
         ratios = np.sqrt(RATIO_PRIOR_WEIGHT) * (shares - self.ratio_mean) / self.ratio_std
         flat_bend = bend.reshape(params.shape[:-1] + (-1,))
-        skin = (self.offset_prior * offsets[..., self.marked, :]).reshape(
-            params.shape[:-1] + (-1,))
         beyond = self.limit_weight * (np.maximum(poses - self.model.upper, 0.0)
                                            - np.maximum(self.model.lower - poses, 0.0))
         flat_beyond = beyond[..., 6:].reshape(params.shape[:-1] + (-1,))
-        return np.concatenate([markers, pull, flat_bend, ratios, skin, flat_beyond], axis=-1)
+        return np.concatenate([markers, pull, flat_bend, ratios, flat_beyond], axis=-1)
 
     def beyond_slopes(self, params: np.ndarray) -> np.ndarray:
         """Derivative of each limit row by its own joint angle, ``(N · 27,)``."""
-        poses = self.unpack(params)[3][:, 6:]
+        poses = self.unpack(params)[2][:, 6:]
         outside = (poses > self.model.upper[6:]) | (poses < self.model.lower[6:])
         return self.limit_weight * outside.ravel().astype(np.float64)
 
@@ -311,18 +289,15 @@ def calibrate(model: HandModel, markers: np.ndarray, *, n_frames: int = CALIBRAT
     problem = _Problem(model, chosen, prior_lengths, ratio_prior or default_ratio_prior(model),
                        limit_weight)
     palm = model.rest_directions[problem.palm] * prior_lengths[problem.palm_bones, None]
-    start = problem.pack(prior_lengths, palm, np.zeros((model.n_joints, 3)), poses)
+    start = problem.pack(prior_lengths, palm, poses)
     result = least_squares(problem.residuals, start, jac=problem.jacobian, method="lm",
                            x_scale="jac", ftol=SOLVER_TOLERANCE, xtol=SOLVER_TOLERANCE)
-    lengths, directions, offsets, fitted = problem.unpack(result.x)
-    calibrated = replace(model.with_geometry(lengths, directions), marker_offsets=offsets)
-    errors = np.linalg.norm(marker_positions(calibrated, fitted) - chosen, axis=-1)
+    lengths, directions, fitted = problem.unpack(result.x)
+    calibrated = model.with_geometry(lengths, directions)
+    errors = np.linalg.norm(forward_kinematics(calibrated, fitted) - chosen, axis=-1)
     children = model.skeleton.bones[:, 1]
-    seen = visible[frames][:, children]
-    squares = np.where(seen, errors[:, children], 0.0) ** 2
-    n_seen = seen.sum(axis=0)
-    rms = np.full(len(children), np.nan)
-    rms[n_seen > 0] = np.sqrt(squares.sum(axis=0)[n_seen > 0] / n_seen[n_seen > 0])
+    with np.errstate(all="ignore"):
+        rms = np.sqrt(np.nanmean(errors[:, children] ** 2, axis=0))
     return Calibration(model=calibrated, frames=frames, poses=fitted, residual=rms,
                        n_frames=counts)
 

@@ -26,7 +26,6 @@ from handdb.hand.model import (
     build_hand_model,
     forward_kinematics,
     joint_transforms,
-    marker_positions,
 )
 from handdb.hand.skeletons import Skeleton
 from handdb.lengths.bone_lengths import BoneLengths
@@ -81,8 +80,8 @@ class MarkerFit:
     joints
         ``(T, J, 3) float64`` joint positions from forward kinematics, clip units.
     residual
-        ``(T, J) float64`` distance from each visible marker to where the fit puts it (its
-        joint moved by the calibrated skin offset), clip units; NaN where it is missing.
+        ``(T, J) float64`` distance from each visible marker to its joint, clip units; NaN
+        where the marker is missing.
     calibration
         The subject calibration, or ``None`` when the bone lengths were given.
     key_frames
@@ -176,8 +175,7 @@ def fit_markers(markers: np.ndarray, *, hand: str = "right", units: str = "mm",
     poses = carry_unconstrained(poses, constrained_dofs(model, visible))
     poses = filter_and_refine(model, mm, poses, passes=filter_passes)
     joints = forward_kinematics(model, poses)
-    residual = np.where(visible, np.linalg.norm(marker_positions(model, poses) - mm, axis=-1),
-                        np.nan)
+    residual = np.where(visible, np.linalg.norm(joints - mm, axis=-1), np.nan)
     return MarkerFit(model=model, poses=poses, joints=joints / scale,
                      residual=residual / scale, calibration=calibration,
                      key_frames=keys)

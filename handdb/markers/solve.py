@@ -31,7 +31,7 @@ from handdb.hand.model import (
     ROOT_ROTATION,
     HandModel,
     clip_to_limits,
-    marker_positions,
+    forward_kinematics,
 )
 
 #: Cut-off of the marker term (eq. 4), millimetres.
@@ -170,7 +170,7 @@ def pose_energy(model: HandModel, pose: np.ndarray, observed: np.ndarray, visibl
     ``observed`` ``(..., J, 3)``, ``visible`` ``(..., J)`` and ``anchor`` ``(..., 33)``
     broadcast against the poses.
     """
-    predicted = marker_positions(model, pose)
+    predicted = forward_kinematics(model, pose)
     markers = marker_term(predicted, observed, visible, cutoff, correspondence)
     return MARKER_WEIGHT * markers + anchor_weight * np.linalg.norm(pose - anchor, axis=-1)
 
@@ -316,7 +316,7 @@ def fit_pose_lsq(model: HandModel, observed: np.ndarray, visible: np.ndarray,
     steps = np.eye(N_DOF) * JACOBIAN_STEP
 
     def residuals(poses: np.ndarray) -> np.ndarray:
-        markers = (marker_positions(model, poses)[..., visible, :] - target)
+        markers = (forward_kinematics(model, poses)[..., visible, :] - target)
         markers = markers.reshape(poses.shape[:-1] + (-1,))
         if anchor is None:
             return markers
@@ -353,7 +353,7 @@ def initial_pose(model: HandModel, observed: np.ndarray, visible: np.ndarray) ->
     """
     if visible.sum() < 3:
         raise ClipDataError("a first pose needs at least three visible markers")
-    rest = marker_positions(model, model.rest_pose())
+    rest = forward_kinematics(model, model.rest_pose())
     palm = np.zeros(model.n_joints, dtype=bool)
     palm[[model.skeleton.root, *model.palm_joints]] = True
     use = visible & palm if (visible & palm).sum() >= 3 else visible
@@ -369,7 +369,7 @@ def _robust_cost(model: HandModel, pose: np.ndarray, observed: np.ndarray,
                  visible: np.ndarray, anchor: np.ndarray | None, anchor_weight: float,
                  cutoff: float) -> float:
     """The objective :func:`fit_pose_lsq` minimises, at ``pose``."""
-    errors = marker_positions(model, pose)[visible] - observed[visible]
+    errors = forward_kinematics(model, pose)[visible] - observed[visible]
     cost = float(np.sum(cutoff ** 2 * np.log1p((errors / cutoff) ** 2)))
     if anchor is not None:
         cost += anchor_weight / MARKER_WEIGHT * float(np.sum((pose - anchor) ** 2))
@@ -395,7 +395,7 @@ def fit_pose_recovering(model: HandModel, observed: np.ndarray, visible: np.ndar
                             anchor_weight=anchor_weight, cutoff=cutoff)
 
     pose = fit(start)
-    distance = np.linalg.norm(marker_positions(model, pose) - observed, axis=-1)
+    distance = np.linalg.norm(forward_kinematics(model, pose) - observed, axis=-1)
     far = visible & (distance > RECOVERY_DISTANCE_MM)
     fingers = np.array(model.skeleton.fingers)
     names = np.array(model.dof_names[6:])
