@@ -226,17 +226,19 @@ def glove(limit_weight: float = 0.0) -> None:
         markers[:, [skeleton.index(j) for j in from_glove]] = recording[
             first:first + GLOVE_CLIP_FRAMES]
         fit, rate = timed_fit(markers, GLOVE_HAND, limit_weight)
-        per_frame = np.nanmean(fit.residual, axis=1)
-        per_joint = np.nanmean(fit.residual, axis=0)
-        worst = skeleton.joints[int(np.nanargmax(per_joint))]
-        residuals.append(fit.residual)
+        marked = [skeleton.index(j) for j in from_glove]
+        seen = fit.residual[:, marked]
+        per_frame = np.nanmean(seen[np.isfinite(seen).any(axis=1)], axis=1)
+        per_joint = np.nanmean(seen, axis=0)
+        worst = from_glove[int(np.nanargmax(per_joint))]
+        residuals.append(seen)
         print(f"glove frames {first * GLOVE_STEP}-{(first + GLOVE_CLIP_FRAMES) * GLOVE_STEP} "
               f"(every {GLOVE_STEP}rd): visible residual mean {np.nanmean(fit.residual):.1f} "
               f"mm, per frame median {np.nanmedian(per_frame):.1f}, 95th pct "
               f"{np.nanpercentile(per_frame, 95):.1f}; worst joint {worst} "
               f"{np.nanmax(per_joint):.1f} mm; {rate:.1f} frames/s")
     pooled = np.concatenate(residuals)
-    per_frame = np.nanmean(pooled, axis=1)
+    per_frame = np.nanmean(pooled[np.isfinite(pooled).any(axis=1)], axis=1)
     print(f"glove, {len(pooled)} frames: visible residual mean {np.nanmean(pooled):.1f} mm, "
           f"per frame median {np.nanmedian(per_frame):.1f}, 95th pct "
           f"{np.nanpercentile(per_frame, 95):.1f}")
