@@ -36,17 +36,16 @@ from pathlib import Path
 
 import numpy as np
 
-from handdb.hand.model import forward_kinematics
-from handdb.hand.skeletons import convert_points, load_skeleton
-from handdb.markers.fit import fit_markers
-from handdb.markers.solve import track
-from handdb.synthetic import synthesize_clip
-
 REPO = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(REPO))
+sys.path.insert(0, str(REPO))  # this checkout's handdb, before any installed copy
 
 from gapfill_datasets import GLOVE, GLOVE_MARKERS, GLOVE_STEP, glove_markers  # noqa: E402
 
+from handdb.hand.model import forward_kinematics  # noqa: E402
+from handdb.hand.skeletons import convert_points, load_skeleton  # noqa: E402
+from handdb.markers.fit import fit_markers  # noqa: E402
+from handdb.markers.solve import track  # noqa: E402
+from handdb.synthetic import synthesize_clip  # noqa: E402
 from tests.support.paths import REAL_TOOLS  # noqa: E402
 from tests.support.real_data import load_interhand, pseudo_clip  # noqa: E402
 
@@ -227,17 +226,19 @@ def glove(limit_weight: float = 0.0) -> None:
         markers[:, [skeleton.index(j) for j in from_glove]] = recording[
             first:first + GLOVE_CLIP_FRAMES]
         fit, rate = timed_fit(markers, GLOVE_HAND, limit_weight)
-        per_frame = np.nanmean(fit.residual, axis=1)
-        per_joint = np.nanmean(fit.residual, axis=0)
-        worst = skeleton.joints[int(np.nanargmax(per_joint))]
-        residuals.append(fit.residual)
+        marked = [skeleton.index(j) for j in from_glove]
+        seen = fit.residual[:, marked]
+        per_frame = np.nanmean(seen[np.isfinite(seen).any(axis=1)], axis=1)
+        per_joint = np.nanmean(seen, axis=0)
+        worst = from_glove[int(np.nanargmax(per_joint))]
+        residuals.append(seen)
         print(f"glove frames {first * GLOVE_STEP}-{(first + GLOVE_CLIP_FRAMES) * GLOVE_STEP} "
               f"(every {GLOVE_STEP}rd): visible residual mean {np.nanmean(fit.residual):.1f} "
               f"mm, per frame median {np.nanmedian(per_frame):.1f}, 95th pct "
               f"{np.nanpercentile(per_frame, 95):.1f}; worst joint {worst} "
               f"{np.nanmax(per_joint):.1f} mm; {rate:.1f} frames/s")
     pooled = np.concatenate(residuals)
-    per_frame = np.nanmean(pooled, axis=1)
+    per_frame = np.nanmean(pooled[np.isfinite(pooled).any(axis=1)], axis=1)
     print(f"glove, {len(pooled)} frames: visible residual mean {np.nanmean(pooled):.1f} mm, "
           f"per frame median {np.nanmedian(per_frame):.1f}, 95th pct "
           f"{np.nanpercentile(per_frame, 95):.1f}")

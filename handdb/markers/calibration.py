@@ -296,8 +296,11 @@ def calibrate(model: HandModel, markers: np.ndarray, *, n_frames: int = CALIBRAT
     calibrated = model.with_geometry(lengths, directions)
     errors = np.linalg.norm(forward_kinematics(calibrated, fitted) - chosen, axis=-1)
     children = model.skeleton.bones[:, 1]
-    with np.errstate(all="ignore"):
-        rms = np.sqrt(np.nanmean(errors[:, children] ** 2, axis=0))
+    seen = visible[frames][:, children]
+    n_seen = seen.sum(axis=0)
+    squares = np.where(seen, errors[:, children], 0.0) ** 2
+    rms = np.full(len(children), np.nan)
+    rms[n_seen > 0] = np.sqrt(squares.sum(axis=0)[n_seen > 0] / n_seen[n_seen > 0])
     return Calibration(model=calibrated, frames=frames, poses=fitted, residual=rms,
                        n_frames=counts)
 

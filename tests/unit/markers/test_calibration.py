@@ -1,3 +1,5 @@
+import warnings
+
 import numpy as np
 import pytest
 
@@ -105,3 +107,15 @@ def test_limit_weight_keeps_calibration_poses_the_tracker_can_take(model):
     assert _excursion_deg(model, bounded.poses) < 2.0
     truth = np.array([clip.bone_lengths[b] for b in model.skeleton.bone_names])
     assert np.abs(bounded.model.bone_lengths - truth).mean() < 1.5
+
+
+def test_bone_never_seen_has_no_residual_and_no_warning(model, capture):
+    hidden = capture.copy()
+    tip = model.skeleton.index("little_tip")
+    hidden[:, tip] = np.nan
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        calibration = calibrate(model, hidden)
+    bone = int(np.flatnonzero(model.skeleton.bones[:, 1] == tip)[0])
+    assert np.isnan(calibration.residual[bone])
+    assert np.isfinite(np.delete(calibration.residual, bone)).all()
