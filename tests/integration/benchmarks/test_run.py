@@ -1,5 +1,6 @@
 """The benchmark's own machinery: synthetic inboxes, the I/O floor, the growth fit."""
 
+import json
 import time
 
 import numpy as np
@@ -124,3 +125,11 @@ def test_the_quick_run_prints_every_target(bench, tmp_path, capsys, monkeypatch)
         assert f"| {row['figure']} | {row['shown']} |" in table
     assert all(r["processed"] == r["n_clips"] for r in results["by_clips"])
     assert results["noop"]["processed"] == 0
+
+
+def test_prefect_overhead_runs_one_task_per_clip_as_the_build(bench, capsys):
+    """The Prefect-alone figure comes from a real flow of one task per clip."""
+    bench.child_prefect_overhead(5)
+    figures = json.loads(capsys.readouterr().out.strip().splitlines()[-1])
+    assert figures["tasks"] == 5
+    assert figures["seconds"] > 0
