@@ -1,48 +1,17 @@
 """The real tool files that ingest build into clips, without Prefect; the refused ones are
 recorded and the rest of the inbox is built (issue 15)."""
 
-import json
-import shutil
-
 import pytest
 
 from handdb.build import BuildOptions, build_in_process
 from handdb.store.query import query
-from tests.unit.ingest.test_real_tools import (
-    BRICE_MAP,
-    GLOVE_TIPS,
-    SIDECAR_2D,
-    SIDECAR_3D,
-    put,
-)
-
-BONES = {"bone_lengths": {"index_pip": 40.0, "thumb_cmc": 34.0}}
+from tests.support.real_tools import tool_inbox
 
 
 @pytest.fixture(scope="module")
 def built(real_tools, dhg_sample, tmp_path_factory):
     root = tmp_path_factory.mktemp("real-tools")
-    inbox = root / "inbox"
-    inbox.mkdir()
-    shutil.copy(dhg_sample, inbox / "dhg.dhg.txt")
-    (inbox / "dhg.clip.json").write_text(json.dumps(SIDECAR_3D | {"skeleton": "dhg22"}))
-    put(real_tools, inbox, "qtm", SIDECAR_3D | {"fps": 100, "joint_map": {
-        "*": None, **GLOVE_TIPS, **{f"{f}_middle": f"{f}_pip" for f in (
-            "index", "middle", "ring", "little")}, "thumb_middle": "thumb_ip"}},
-        clip_id="glove")
-    put(real_tools, inbox, "openpose", SIDECAR_2D | BONES | {"person": 0, "fps": 25},
-        clip_id="signer")
-    put(real_tools, inbox, "dlc", SIDECAR_2D | BONES | {
-        "individual": "rightHand", "frame_from": "row", "joint_map": BRICE_MAP,
-        "image": {"width": 852, "height": 480}}, clip_id="brice-right")
-    put(real_tools, inbox, "mediapipe", SIDECAR_2D | BONES | {
-        "hand_index": 0, "image": {"width": 1280, "height": 720}}, clip_id="mp-hand0")
-    put(real_tools, inbox, "interhand", SIDECAR_3D | {"capture": "3", "frame_offset": "first"},
-        clip_id="ih-cap3")
-    put(real_tools, inbox, "kistler", SIDECAR_3D | {"fps": 60}, clip_id="kistler")
-    put(real_tools, inbox, "optotrak", SIDECAR_3D | {"joint_map": {"*": None,
-                                                                  "Marker_1": "wrist"}},
-        clip_id="opto")
+    inbox = tool_inbox(real_tools, dhg_sample, root / "inbox")
     db = str(root / "db")
     return build_in_process(inbox, db, BuildOptions(export_usd=False)), db
 

@@ -23,7 +23,7 @@ from handdb.ingest import discover, dlc, get_format, load_clip
 from handdb.lifting import lift
 from handdb.store.query import query
 from handdb.synthetic.clips import synthesize_clip
-from tests.unit.ingest.test_real_tools import BRICE_MAP, SIDECAR_2D, put
+from tests.support.real_tools import BRICE_MAP, SIDECAR_2D, put
 
 #: Images picked from a synthetic clip, in the order a labeller might list them.
 N_IMAGES, SEED = 16, 4

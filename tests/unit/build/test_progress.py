@@ -124,7 +124,7 @@ def test_a_marker_clip_shows_its_model_fit_in_flight(tmp_path, dhg_sample):
     import json
     import shutil
 
-    from tests.unit.ingest.test_real_tools import SIDECAR_3D
+    from tests.support.real_tools import SIDECAR_3D
 
     inbox = tmp_path / "inbox"
     inbox.mkdir()

@@ -12,45 +12,15 @@ import pytest
 
 from handdb.errors import InputError
 from handdb.ingest import discover, load_clip
-
-SIDECAR_2D = {"skeleton": "mediapipe21", "hand": "right", "fps": 30, "subject": "s01",
-              "units": "mm", "camera": {"model": "orthographic"}}
-SIDECAR_3D = {"skeleton": "mediapipe21", "hand": "right", "fps": 30, "subject": "s01",
-              "units": "mm"}
-
-#: The body parts of the DeepLabCut hands project, as canonical joints (REPORT.md §2.3).
-BRICE_MAP = {"wristCenter": "wrist", "thumbStart": "thumb_mcp", "thumbCenter": "thumb_ip",
-             "thumbEnd": "thumb_tip"} | {
-    f"{finger}{part}": f"{finger}_{joint}" for finger in ("index", "middle", "ring", "little")
-    for part, joint in (("Start", "mcp"), ("Center", "pip"), ("End", "tip"))}
-
-GLOVE_MARKERS = ("hand_top", "hand_left", "hand_right", "thumb_tip", "thumb_middle",
-                 "little_tip", "little_middle", "ring_tip", "ring_middle", "middle_middle",
-                 "middle_tip", "index_tip", "index_middle", "right_elbow", "back_top",
-                 "back_left", "back_right", "pillow_top", "pillow_left", "pillow_right",
-                 "right_shoulder")
-GLOVE_TIPS = {f"{f}_tip": f"{f}_tip" for f in ("thumb", "index", "middle", "ring", "little")}
-
-SOURCES = {
-    "openpose": ("openpose-hand", ".openpose"),
-    "dlc": ("dlc-hands/CollectedData_Brice.csv", ".dlc.csv"),
-    "mediapipe": ("mediapipe/hand_landmarks.csv", ".mediapipe.csv"),
-    "optotrak": ("c3d/Optotrak.c3d", ".c3d"),
-    "kistler": ("c3d/Kistler.c3d", ".c3d"),
-    "qtm": ("qualisys-glove/recording.tsv", ".qtm.tsv"),
-    "interhand": ("interhand/test_interhand2.6m_joint_3d.json", ".interhand.json"),
-}
-
-
-def put(real_tools, inbox, source, sidecar, clip_id="clip"):
-    """Copy a real file into the inbox as ``<clip_id><suffix>`` beside its sidecar."""
-    relative, suffix = SOURCES[source]
-    inbox.mkdir(exist_ok=True)
-    target = inbox / f"{clip_id}{suffix}"
-    origin = real_tools / relative
-    (shutil.copytree if origin.is_dir() else shutil.copy)(origin, target)
-    (inbox / f"{clip_id}.clip.json").write_text(json.dumps(sidecar))
-    return target
+from tests.support.real_tools import (
+    BRICE_MAP,
+    GLOVE_MARKERS,
+    GLOVE_TIPS,
+    SIDECAR_2D,
+    SIDECAR_3D,
+    SOURCES,
+    put,
+)
 
 
 def read(inbox):
