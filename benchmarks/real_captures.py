@@ -3,7 +3,11 @@
 Prints, and writes to ``benchmarks/RESULTS-real.md``, per dataset, camera (orthographic,
 pinhole), pixel noise (0-3 px) and method (``thesis``, ``kinematic``, flat ``z = 0``): the
 mean root-relative |dZ|, bone-sign accuracy overall and per finger, MPJPE and PA-MPJPE,
-and the bones on which the default's sign accuracy falls below the thesis's.
+and the bones on which the default's sign accuracy falls below the thesis's. Then the real
+tool outputs that carry no truth (OpenPose, DeepLabCut, MediaPipe, C3D writers, the
+Qualisys glove; :func:`tests.support.real_tools.tool_inbox`), built as a user's inbox
+without Prefect: each clip's plausibility verdict with its reasons, each refused file with
+its reason.
 
 Datasets (``../shared/data``, each skipped when absent):
 
@@ -23,6 +27,7 @@ from __future__ import annotations
 
 import argparse
 import sys
+import tempfile
 import time
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass
@@ -33,12 +38,15 @@ import numpy as np
 REPO = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO))
 
+from handdb.build import BuildOptions, build_in_process  # noqa: E402
 from handdb.clip import Camera  # noqa: E402
 from handdb.hand.skeletons import FINGERS, Skeleton, bone_length_array, load_skeleton  # noqa: E402
 from handdb.lifting import lift  # noqa: E402
+from handdb.store.query import query  # noqa: E402
 from handdb.synthetic import synthesize_clip  # noqa: E402
 from tests.support import real_data  # noqa: E402
 from tests.support.paths import DHG_SAMPLE, REAL_TOOLS  # noqa: E402
+from tests.support.real_tools import KNOWN_BONES, tool_inbox  # noqa: E402
 
 OUT = Path(__file__).resolve().parent / "RESULTS-real.md"
 INTERHAND = REAL_TOOLS / "interhand" / "test_interhand2.6m_joint_3d.json"
@@ -256,6 +264,36 @@ def section(key: str, title: str, cases: CaseSource | None, plan: dict) -> list[
                     "| camera | noise px | verdict |", "|---|---:|---|", *verdicts, ""]
 
 
+def tool_verdicts() -> list[str]:
+    """The plausibility verdicts of the real tool outputs, built as one inbox."""
+    lines = ["## Real tool outputs without truth: the plausibility verdict", "",
+             "Every file of `real-tools` (and the DHG capture) built as one inbox, no USD, "
+             "the 2D tools' sidecars giving two bone lengths "
+             f"({', '.join(f'{b} {v:g} mm' for b, v in KNOWN_BONES['bone_lengths'].items())})"
+             ". A stored clip is flagged when its hand is one a human hand could not produce "
+             "or part of it could not be known (`clips.flagged`, reasons in "
+             "`clips.flag_reasons`).", ""]
+    if not (REAL_TOOLS.is_dir() and DHG_SAMPLE.is_file()):
+        return lines + ["Skipped: the data is absent (../shared/data).", ""]
+    with tempfile.TemporaryDirectory() as scratch:
+        root = Path(scratch)
+        summary = build_in_process(tool_inbox(REAL_TOOLS, DHG_SAMPLE, root / "inbox"),
+                                   str(root / "db"), BuildOptions(export_usd=False))
+        clips = query(str(root / "db"), "SELECT clip_id, source_format, n_frames, lift_method, "
+                      "flagged, flag_reasons FROM clips ORDER BY clip_id").to_pylist()
+    lines += ["| clip | tool | frames | lifted by | verdict |", "|---|---|---:|---|---|"]
+    for clip in clips:
+        verdict = ("flagged: " + "; ".join(clip["flag_reasons"]) if clip["flagged"]
+                   else "plausible")
+        lines.append(f"| {clip['clip_id']} | {clip['source_format']} | {clip['n_frames']} | "
+                     f"{clip['lift_method']} | {verdict} |")
+    lines += ["", "| refused file | field | reason |", "|---|---|---|"]
+    for refusal in sorted(summary.refusals, key=lambda r: r.file):
+        lines.append(f"| {Path(refusal.file).name} | {refusal.field or ''} | "
+                     f"{refusal.reason.replace('|', '/')} |")
+    return lines + [""]
+
+
 def report(plan: dict) -> str:
     """The whole report as markdown."""
     lines = ["# Depth reconstruction on real hands", "",
@@ -272,7 +310,7 @@ def report(plan: dict) -> str:
              "drawn by its own seed.", ""]
     for key, title, cases in datasets(plan):
         lines += section(key, title, cases, plan)
-    return "\n".join(lines)
+    return "\n".join(lines + tool_verdicts())
 
 
 def main(argv: list[str] | None = None) -> None:
