@@ -7,8 +7,12 @@ takes neither bounds nor a robust loss, so the calibration poses are free of joi
 and the frames are chosen where markers are plentiful and clean. The residuals are
 
 * every visible marker's error (the model's markers sit on its joints);
-* ``sqrt(λ1)·(s − s̄)``, the paper's pull of the bone lengths towards ``s̄``, the median
-  distance between the markers at each bone's ends;
+* ``(s − s̄) / σ̄``, the paper's pull of the bone lengths towards ``s̄``, the median
+  distance between the markers at each bone's ends, weighted by how well that median is
+  known: ``σ̄`` is its standard error over the frames that see both ends (never above the
+  paper's fixed weight ``λ1``'s ``1/sqrt(λ1)``). A bone seen in every frame is held to its
+  measurement; with the paper's fixed weight alone, a thumb the model poses badly traded
+  its phalanges for marker error and collapsed them to 0 mm on the real DHG capture;
 * the X-ray ratio prior: each phalanx's share of its finger, ``(s_b / Σ_finger s −
   mean_b) / std_b`` (:func:`handdb.lengths.ratios.bone_ratios` of the Chaudhry et al. statistics);
 * a weak pull of each palm bone's direction towards the template hand, which fixes the
@@ -41,8 +45,20 @@ from handdb.markers.solve import SOLVER_TOLERANCE, fit_pose_lsq, initial_pose
 #: Calibration frames fitted together.
 CALIBRATION_FRAMES = 12
 
-#: Weight λ1 of the pull of bone lengths towards the marker distances, per mm².
+#: Weight λ1 of the pull of bone lengths towards the marker distances, per mm²: the
+#: paper's fixed weight, and the least any bone's pull gets.
 LENGTH_PRIOR_WEIGHT = 0.05
+
+#: Precision of one marker-to-marker distance beyond the spread the frames show, mm: a
+#: bone seen rigidly (no spread) in ``n`` frames is known to about this over ``sqrt(n)``.
+MARKER_DISTANCE_FLOOR_MM = 2.0
+
+#: Standard error of a sample median per standard error of a sample mean, for normal
+#: samples: ``sqrt(pi / 2)``.
+MEDIAN_EFFICIENCY = float(np.sqrt(np.pi / 2.0))
+
+#: Standard deviations per median absolute deviation, for normal samples.
+MAD_TO_STD = 1.4826
 
 #: Weight of the X-ray ratio prior, per squared standard deviation: weak, so that a bone
 #: both of whose markers are seen is measured by them, while one seldom seen leans on it.
@@ -108,12 +124,44 @@ def measured_lengths(model: HandModel, markers: np.ndarray) -> tuple[np.ndarray,
     counts : numpy.ndarray
         ``(B,) int64`` frames each median is taken over.
     """
+    lengths, counts, _ = _marker_distances(model, markers)
+    return lengths, counts
+
+
+def length_pull_weights(spread: np.ndarray, counts: np.ndarray) -> np.ndarray:
+    """Weight of each bone's pull towards its measured length, per mm².
+
+    The inverse square of the median's standard error, ``sqrt(pi/2) · sqrt(spread² +
+    floor²) / sqrt(n)`` (:data:`MARKER_DISTANCE_FLOOR_MM`), and never below
+    :data:`LENGTH_PRIOR_WEIGHT`; that least weight where a bone is never measured.
+
+    Parameters
+    ----------
+    spread
+        ``(B,) float64`` robust standard deviation of each bone's marker distances over the
+        frames, mm (NaN where never measured).
+    counts
+        ``(B,) int64`` frames measuring each bone.
+    """
+    variance = MEDIAN_EFFICIENCY ** 2 * (np.nan_to_num(spread) ** 2
+                                         + MARKER_DISTANCE_FLOOR_MM ** 2)
+    with np.errstate(divide="ignore"):
+        precision = np.where(counts > 0, counts / variance, 0.0)
+    return np.maximum(precision, LENGTH_PRIOR_WEIGHT)
+
+
+def _marker_distances(model: HandModel, markers: np.ndarray
+                      ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Median, frame count and robust spread (mm) of each bone's marker distances."""
     bones = model.skeleton.bones
     spans = np.linalg.norm(markers[:, bones[:, 1]] - markers[:, bones[:, 0]], axis=-1)
     counts = np.isfinite(spans).sum(axis=0)
+    seen = np.where(counts > 0, spans, 0.0)
     with np.errstate(all="ignore"):
-        medians = np.nanmedian(np.where(counts > 0, spans, 0.0), axis=0)
-    return np.where(counts > 0, medians, model.bone_lengths), counts
+        medians = np.nanmedian(seen, axis=0)
+        spread = MAD_TO_STD * np.nanmedian(np.abs(seen - medians), axis=0)
+    lengths = np.where(counts > 0, medians, model.bone_lengths)
+    return lengths, counts, np.where(counts > 0, spread, np.nan)
 
 
 def select_frames(visible: np.ndarray, n: int = CALIBRATION_FRAMES) -> np.ndarray:
@@ -160,8 +208,8 @@ class _Problem:
     """
 
     def __init__(self, model: HandModel, markers: np.ndarray,
-                 prior_lengths: np.ndarray, ratio_prior: tuple[np.ndarray, np.ndarray],
-                 limit_weight: float = 0.0):
+                 prior_lengths: np.ndarray, pull_weights: np.ndarray,
+                 ratio_prior: tuple[np.ndarray, np.ndarray], limit_weight: float = 0.0):
         skeleton = model.skeleton
         self.model = model
         self.limit_weight = limit_weight
@@ -172,6 +220,7 @@ class _Problem:
         self.palm_bones = np.searchsorted(skeleton.bones[:, 1], self.palm)
         self.finger_bones = np.setdiff1d(np.arange(len(skeleton.bones)), self.palm_bones)
         self.prior_lengths = prior_lengths
+        self.pull_scale = np.sqrt(pull_weights)
         self.template_palm = model.rest_directions[self.palm] * prior_lengths[self.palm_bones, None]
         mean, std = ratio_prior
         child = skeleton.bones[:, 1]
@@ -205,7 +254,7 @@ class _Problem:
         joints = forward_kinematics(self.model, poses, lengths[..., None, :],
                                     directions[..., None, :, :])
         markers = (joints[..., self.visible, :] - self.target).reshape(params.shape[:-1] + (-1,))
-        pull = np.sqrt(LENGTH_PRIOR_WEIGHT) * (lengths - self.prior_lengths)
+        pull = self.pull_scale * (lengths - self.prior_lengths)
         palm = params[..., len(self.finger_bones):self.n_shape].reshape(
             params.shape[:-1] + (len(self.palm), 3))
         units = palm / np.linalg.norm(palm, axis=-1, keepdims=True)
@@ -279,15 +328,15 @@ def calibrate(model: HandModel, markers: np.ndarray, *, n_frames: int = CALIBRAT
     """
     markers = np.asarray(markers, dtype=np.float64)
     visible = finite_points(markers)
-    prior_lengths, counts = measured_lengths(model, markers)
+    prior_lengths, counts, spread = _marker_distances(model, markers)
     start_model = model.with_geometry(prior_lengths)
     frames = select_frames(visible, n_frames)
     chosen = markers[frames]
     poses = np.stack([fit_pose_lsq(start_model, obs, seen, initial_pose(start_model, obs, seen),
                                    None)
                       for obs, seen in zip(chosen, visible[frames], strict=True)])
-    problem = _Problem(model, chosen, prior_lengths, ratio_prior or default_ratio_prior(model),
-                       limit_weight)
+    problem = _Problem(model, chosen, prior_lengths, length_pull_weights(spread, counts),
+                       ratio_prior or default_ratio_prior(model), limit_weight)
     palm = model.rest_directions[problem.palm] * prior_lengths[problem.palm_bones, None]
     start = problem.pack(prior_lengths, palm, poses)
     result = least_squares(problem.residuals, start, jac=problem.jacobian, method="lm",

@@ -7,9 +7,12 @@ from handdb.hand.model import forward_kinematics
 from handdb.lengths.bone_lengths import bone_lengths_table
 from handdb.markers.calibration import (
     CALIBRATED_SOURCE,
+    LENGTH_PRIOR_WEIGHT,
     LIMIT_PRIOR_MM_PER_RAD,
+    MARKER_DISTANCE_FLOOR_MM,
     calibrate,
     calibrated_bone_lengths,
+    length_pull_weights,
     measured_lengths,
     select_frames,
 )
@@ -119,3 +122,14 @@ def test_bone_never_seen_has_no_residual_and_no_warning(model, capture):
     bone = int(np.flatnonzero(model.skeleton.bones[:, 1] == tip)[0])
     assert np.isnan(calibration.residual[bone])
     assert np.isfinite(np.delete(calibration.residual, bone)).all()
+
+
+def test_length_pull_is_held_by_how_well_the_median_is_known():
+    spread = np.array([0.0, 5.0, 5.0, np.nan])
+    counts = np.array([100, 100, 4, 0])
+    weights = length_pull_weights(spread, counts)
+    # rigid and seen often: pinned; spread out or seldom seen: looser; never seen: the
+    # paper's fixed weight
+    assert weights[0] > weights[1] > weights[2] >= LENGTH_PRIOR_WEIGHT
+    assert weights[3] == LENGTH_PRIOR_WEIGHT
+    assert weights[0] == pytest.approx(100 / (np.pi / 2 * MARKER_DISTANCE_FLOOR_MM ** 2))
