@@ -51,7 +51,7 @@ LENGTH_PRIOR_WEIGHT = 0.05
 
 #: Precision of one marker-to-marker distance beyond the spread the frames show, mm: a
 #: bone seen rigidly (no spread) in ``n`` frames is known to about this over ``sqrt(n)``.
-MARKER_DISTANCE_FLOOR_MM = 2.0
+MARKER_DISTANCE_FLOOR_MM = 1.0
 
 #: Standard error of a sample median per standard error of a sample mean, for normal
 #: samples: ``sqrt(pi / 2)``.
