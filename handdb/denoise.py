@@ -29,6 +29,7 @@ from functools import cache
 import numpy as np
 
 from handdb.compiled import kernel
+from handdb.robust import MAD_TO_SIGMA
 
 #: Half-widths (frames) of the smoothing windows tried; 2 is the narrowest window (5
 #: frames) in which a quadratic does not pass through every sample.
@@ -37,8 +38,6 @@ SMOOTHING_HALF_WIDTHS = (2, 3, 4, 6)
 SMOOTHING_DEGREE = 2
 #: Noise level (pixels) below which tracks are taken as clean and not smoothed.
 MIN_NOISE_PX = 0.05
-#: Median absolute deviation to standard deviation, for Gaussian noise.
-MAD_TO_SIGMA = 1.4826
 #: Variance of the fourth difference of unit white noise: 1 + 16 + 36 + 16 + 1.
 FOURTH_DIFFERENCE_VARIANCE = 70.0
 #: Fourth differences the noise level's median is taken over, at most.

@@ -53,6 +53,7 @@ from handdb.lengths.estimate import (
     sized_like,
 )
 from handdb.lengths.ratios import bone_ratios, table1_ratios
+from handdb.robust import MAD_TO_SIGMA
 from handdb.store import tables
 
 #: Every source of a bone length, most direct first.
@@ -60,8 +61,6 @@ SOURCES: tuple[str, ...] = (
     "given", "truth", "calibrated", "clip", "ratios", "proportions", "population",
 )
 
-#: Robust standard deviation of a median absolute deviation.
-MAD_TO_SIGMA = 1.4826
 
 #: Relative spread of a hand length the sidecar gives (a tape measure's).
 GIVEN_HAND_LENGTH_SPREAD = 0.02

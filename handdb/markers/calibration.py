@@ -41,6 +41,7 @@ from handdb.hand.model import N_DOF, HandModel, forward_kinematics
 from handdb.lengths.bone_lengths import BoneLengths
 from handdb.lengths.ratios import bone_ratios, table1_ratios
 from handdb.markers.solve import SOLVER_TOLERANCE, fit_pose_lsq, initial_pose
+from handdb.robust import MEDIAN_EFFICIENCY, robust_spread
 
 #: Calibration frames fitted together.
 CALIBRATION_FRAMES = 12
@@ -52,13 +53,6 @@ LENGTH_PRIOR_WEIGHT = 0.05
 #: Precision of one marker-to-marker distance beyond the spread the frames show, mm: a
 #: bone seen rigidly (no spread) in ``n`` frames is known to about this over ``sqrt(n)``.
 MARKER_DISTANCE_FLOOR_MM = 1.0
-
-#: Standard error of a sample median per standard error of a sample mean, for normal
-#: samples: ``sqrt(pi / 2)``.
-MEDIAN_EFFICIENCY = float(np.sqrt(np.pi / 2.0))
-
-#: Standard deviations per median absolute deviation, for normal samples.
-MAD_TO_STD = 1.4826
 
 #: Weight of the X-ray ratio prior, per squared standard deviation: weak, so that a bone
 #: both of whose markers are seen is measured by them, while one seldom seen leans on it.
@@ -159,9 +153,8 @@ def _marker_distances(model: HandModel, markers: np.ndarray
     seen = np.where(counts > 0, spans, 0.0)
     with np.errstate(all="ignore"):
         medians = np.nanmedian(seen, axis=0)
-        spread = MAD_TO_STD * np.nanmedian(np.abs(seen - medians), axis=0)
     lengths = np.where(counts > 0, medians, model.bone_lengths)
-    return lengths, counts, np.where(counts > 0, spread, np.nan)
+    return lengths, counts, np.where(counts > 0, robust_spread(seen), np.nan)
 
 
 def select_frames(visible: np.ndarray, n: int = CALIBRATION_FRAMES) -> np.ndarray:

@@ -37,6 +37,7 @@ from handdb.clip import IMAGES, METERS_PER_UNIT, VIDEO
 from handdb.hand import anatomy
 from handdb.hand.layout import palm_normals, unit_vectors
 from handdb.hand.skeletons import FINGERS, Skeleton
+from handdb.robust import MAD_TO_SIGMA
 
 #: Hand lengths (distal wrist crease to the middle fingertip) the gate admits, mm: from a
 #: small adult hand to a very large one.
@@ -95,8 +96,6 @@ ORDER_TOLERANCE = 0.25
 #: the little knuckle than the index one in 98 % of the real capture's frames).
 THUMB_BASES = ("thumb_mcp", "thumb_cmc")
 
-#: Robust standard deviation of a median absolute deviation.
-MAD_TO_SIGMA = 1.4826
 
 #: The hinge joints whose flexion is checked, by the role of the bone that ends at them
 #: (the bone after the joint): long fingers' PIP and DIP, the thumb's IP, and each MCP.
