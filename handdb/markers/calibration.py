@@ -17,6 +17,13 @@ and the frames are chosen where markers are plentiful and clean. The residuals a
   mean_b) / std_b`` (:func:`handdb.lengths.ratios.bone_ratios` of the Chaudhry et al. statistics);
 * a weak pull of each palm bone's direction towards the template hand, which fixes the
   rotation that palm shape and root orientation could otherwise trade;
+* each bone's length below the shortest of adult hands the plausibility gate admits
+  (:func:`handdb.validation.plausibility.length_bounds_mm`), so that a bone no marker pair
+  measures (a glove's skin markers skip joints, a tracker hides a joint) cannot be traded
+  away to 0 mm for marker error. Only the lower bound: a bone longer than any hand comes
+  from markers that measure it so (skin markers named for a joint they are not on), which
+  the gate then flags, and holding it short left the glove's fingers far from their
+  markers;
 * optionally (``limit_weight``), each calibration pose's joint angles beyond the model's
   bounds, so that the shape is one the bounded tracker can pose. Off by default: on the
   Qualisys glove it cut the visible residual from 11.7 to 4.2 mm, but it made the
@@ -42,6 +49,7 @@ from handdb.lengths.bone_lengths import BoneLengths
 from handdb.lengths.ratios import bone_ratios, table1_ratios
 from handdb.markers.solve import SOLVER_TOLERANCE, fit_pose_lsq, initial_pose
 from handdb.robust import MEDIAN_EFFICIENCY, robust_spread
+from handdb.validation.plausibility import length_bounds_mm
 
 #: Calibration frames fitted together.
 CALIBRATION_FRAMES = 12
@@ -67,6 +75,10 @@ PALM_PRIOR_WEIGHT = 0.01
 #: bounded tracker cannot take (a finger twisted 60° at its knuckle) is a shape the tracker
 #: cannot fit; chosen a priori, not fitted to any capture.
 LIMIT_PRIOR_MM_PER_RAD = 100.0
+
+#: Weight of a bone's length below the adult range, per mm: a millimetre short costs as
+#: much as a marker 100 mm off in one frame, so the range holds like a bound.
+LENGTH_BOUND_WEIGHT = 100.0
 
 #: Finite-difference step of the calibration Jacobian, mm or rad.
 JACOBIAN_STEP = 1e-6
@@ -220,6 +232,8 @@ class _Problem:
         self.ratio_bones = np.flatnonzero(np.isfinite(mean[child]) & (std[child] > 0))
         self.ratio_mean = mean[child][self.ratio_bones]
         self.ratio_std = std[child][self.ratio_bones]
+        bounds = length_bounds_mm(skeleton)[child]
+        self.length_low = np.nan_to_num(bounds[:, 0], nan=0.0)
         fingers = np.array(skeleton.fingers)[child]
         self.same_finger = (fingers[self.ratio_bones][:, None] == fingers[None, :]) & np.isin(
             np.arange(len(child)), self.ratio_bones)[None, :]
@@ -257,10 +271,12 @@ class _Problem:
         shares = lengths[..., self.ratio_bones] / totals
         ratios = np.sqrt(RATIO_PRIOR_WEIGHT) * (shares - self.ratio_mean) / self.ratio_std
         flat_bend = bend.reshape(params.shape[:-1] + (-1,))
+        too_short = LENGTH_BOUND_WEIGHT * np.maximum(self.length_low - lengths, 0.0)
         beyond = self.limit_weight * (np.maximum(poses - self.model.upper, 0.0)
                                            - np.maximum(self.model.lower - poses, 0.0))
         flat_beyond = beyond[..., 6:].reshape(params.shape[:-1] + (-1,))
-        return np.concatenate([markers, pull, flat_bend, ratios, flat_beyond], axis=-1)
+        return np.concatenate([markers, pull, flat_bend, ratios, too_short, flat_beyond],
+                              axis=-1)
 
     def beyond_slopes(self, params: np.ndarray) -> np.ndarray:
         """Derivative of each limit row by its own joint angle, ``(N · 27,)``."""

@@ -131,8 +131,11 @@ class Verdict:
         return bool(self.reasons)
 
 
-def _length_bounds_mm(skeleton: Skeleton) -> np.ndarray:
-    """``(J, 2)`` bounds of each bone's length, mm; NaN for bones without a proportion."""
+def length_bounds_mm(skeleton: Skeleton) -> np.ndarray:
+    """``(J, 2)`` bounds of each bone's length an adult hand can have, mm.
+
+    By the bone's child joint; NaN for bones without a proportion.
+    """
     proportion = anatomy.hand_length_proportions(skeleton)
     low, high = HAND_LENGTH_RANGE_MM
     from_wrist = np.array([p >= 0 and skeleton.roles[p] == "wrist" for p in skeleton.parents])
@@ -168,7 +171,7 @@ def check_bone_lengths(skeleton: Skeleton, lengths: np.ndarray, units: str
         The reasons found, and ``(J,) bool`` of the bones at fault.
     """
     mm = lengths * METERS_PER_UNIT[units] * 1000.0
-    bounds = _length_bounds_mm(skeleton)
+    bounds = length_bounds_mm(skeleton)
     reasons: list[str] = []
     bones = np.zeros(skeleton.n_joints, dtype=bool)
     for j in skeleton.bones[:, 1]:
