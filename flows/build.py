@@ -124,7 +124,7 @@ def process(item: PlannedClip, context: BuildContext) -> ClipResult | Refusal:
     return outcome
 
 
-def _first_done(futures: Collection[PrefectFuture]) -> PrefectFuture:
+def first_done(futures: Collection[PrefectFuture]) -> PrefectFuture:
     """The first of ``futures`` to finish, with its final state.
 
     ``wait`` keeps the state the task ended in; without it, ``state`` asks the server,
@@ -198,7 +198,7 @@ def build(inbox: str, db: str, gap_fill: str | None = None, lift: str | None = N
             logger.warning("repaired %s", repair)
         context, todo = run.context, run.todo
         finished = sliding_window(todo, window, lambda item: process.submit(item, context),
-                                  _first_done)
+                                  first_done)
         for item, future in finished:
             outcome = _outcome(future)
             # a refusal is the input's, reported by the summary and the quarantine (a

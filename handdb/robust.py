@@ -1,6 +1,8 @@
-"""Robust statistics the stages share: a spread from the median absolute deviation."""
+"""Robust statistics the stages share: medians of samples with gaps, and spreads."""
 
 from __future__ import annotations
+
+import warnings
 
 import numpy as np
 
@@ -10,6 +12,23 @@ MAD_TO_SIGMA = 1.4826
 #: Standard error of a sample median per standard error of a sample mean, for normal
 #: samples: ``sqrt(pi / 2)``.
 MEDIAN_EFFICIENCY = float(np.sqrt(np.pi / 2.0))
+
+
+def nan_median(values: np.ndarray, axis: int = 0, keepdims: bool = False) -> np.ndarray:
+    """Median along ``axis`` ignoring NaN; NaN, without a warning, where no sample is finite.
+
+    Parameters
+    ----------
+    values
+        Samples along ``axis``, NaN where missing.
+    axis
+        The axis of the samples.
+    keepdims
+        Keep ``axis`` with length 1.
+    """
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)
+        return np.nanmedian(values, axis=axis, keepdims=keepdims)
 
 
 def robust_spread(values: np.ndarray, axis: int = 0) -> np.ndarray:
@@ -27,6 +46,5 @@ def robust_spread(values: np.ndarray, axis: int = 0) -> np.ndarray:
     numpy.ndarray
         ``values``'s shape without ``axis``, in its unit; NaN where no sample is finite.
     """
-    with np.errstate(all="ignore"):
-        median = np.nanmedian(values, axis=axis, keepdims=True)
-        return MAD_TO_SIGMA * np.nanmedian(np.abs(values - median), axis=axis)
+    deviations = np.abs(values - nan_median(values, axis=axis, keepdims=True))
+    return MAD_TO_SIGMA * nan_median(deviations, axis=axis)

@@ -53,7 +53,7 @@ from handdb.lengths.estimate import (
     sized_like,
 )
 from handdb.lengths.ratios import bone_ratios, table1_ratios
-from handdb.robust import MAD_TO_SIGMA
+from handdb.robust import robust_spread
 from handdb.store import tables
 
 #: Every source of a bone length, most direct first.
@@ -121,9 +121,7 @@ def _median_and_spread(values: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     The spread is the median absolute deviation as a standard deviation, over
     ``sqrt(n)``; both are ``(k,)``, in the unit of ``values``.
     """
-    median = np.median(values, axis=0)
-    mad = np.median(np.abs(values - median), axis=0)
-    return median, MAD_TO_SIGMA * mad / np.sqrt(len(values))
+    return np.median(values, axis=0), robust_spread(values) / np.sqrt(len(values))
 
 
 def _truth(clip: Clip) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

@@ -9,8 +9,8 @@ and the frames are chosen where markers are plentiful and clean. The residuals a
 * every visible marker's error (the model's markers sit on its joints);
 * ``(s − s̄) / σ̄``, the paper's pull of the bone lengths towards ``s̄``, the median
   distance between the markers at each bone's ends, weighted by how well that median is
-  known: ``σ̄`` is its standard error over the frames that see both ends (never above the
-  paper's fixed weight ``λ1``'s ``1/sqrt(λ1)``). A bone seen in every frame is held to its
+  known: ``σ̄`` is its standard error over the frames that see both ends, and at most
+  ``1/sqrt(λ1)``, the paper's fixed weight. A bone seen in every frame is held to its
   measurement; with the paper's fixed weight alone, a thumb the model poses badly traded
   its phalanges for marker error and collapsed them to 0 mm on the real DHG capture;
 * the X-ray ratio prior: each phalanx's share of its finger, ``(s_b / Σ_finger s −
@@ -48,7 +48,7 @@ from handdb.hand.model import N_DOF, HandModel, forward_kinematics
 from handdb.lengths.bone_lengths import BoneLengths
 from handdb.lengths.ratios import bone_ratios, table1_ratios
 from handdb.markers.solve import SOLVER_TOLERANCE, fit_pose_lsq, initial_pose
-from handdb.robust import MEDIAN_EFFICIENCY, robust_spread
+from handdb.robust import MEDIAN_EFFICIENCY, nan_median, robust_spread
 from handdb.validation.plausibility import length_bounds_mm
 
 #: Calibration frames fitted together.
@@ -163,9 +163,7 @@ def _marker_distances(model: HandModel, markers: np.ndarray
     spans = np.linalg.norm(markers[:, bones[:, 1]] - markers[:, bones[:, 0]], axis=-1)
     counts = np.isfinite(spans).sum(axis=0)
     seen = np.where(counts > 0, spans, 0.0)
-    with np.errstate(all="ignore"):
-        medians = np.nanmedian(seen, axis=0)
-    lengths = np.where(counts > 0, medians, model.bone_lengths)
+    lengths = np.where(counts > 0, nan_median(seen), model.bone_lengths)
     return lengths, counts, np.where(counts > 0, robust_spread(seen), np.nan)
 
 

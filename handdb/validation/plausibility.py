@@ -37,7 +37,7 @@ from handdb.clip import IMAGES, METERS_PER_UNIT, VIDEO
 from handdb.hand import anatomy
 from handdb.hand.layout import palm_normals, unit_vectors
 from handdb.hand.skeletons import FINGERS, Skeleton
-from handdb.robust import MAD_TO_SIGMA
+from handdb.robust import nan_median, robust_spread
 
 #: Hand lengths (distal wrist crease to the middle fingertip) the gate admits, mm: from a
 #: small adult hand to a very large one.
@@ -95,7 +95,6 @@ ORDER_TOLERANCE = 0.25
 #: trackers put the CMC anywhere from the wrist to the palm's centre (DHG's lies nearer
 #: the little knuckle than the index one in 98 % of the real capture's frames).
 THUMB_BASES = ("thumb_mcp", "thumb_cmc")
-
 
 #: The hinge joints whose flexion is checked, by the role of the bone that ends at them
 #: (the bone after the joint): long fingers' PIP and DIP, the thumb's IP, and each MCP.
@@ -212,18 +211,15 @@ def check_constancy(skeleton: Skeleton, xyz: np.ndarray) -> tuple[list[str], np.
     """
     parent, child = skeleton.bones.T
     per_frame = np.linalg.norm(xyz[:, child] - xyz[:, parent], axis=-1)
-    reasons: list[str] = []
+    measured = np.isfinite(per_frame).sum(axis=0) >= 2
+    median = nan_median(per_frame)
+    spread = robust_spread(per_frame)
+    changing = measured & (median > 0) & (spread > CONSTANCY_LIMIT * median)
     bones = np.zeros(skeleton.n_joints, dtype=bool)
-    for k, j in enumerate(child):
-        values = per_frame[:, k][np.isfinite(per_frame[:, k])]
-        if len(values) < 2:
-            continue
-        median = np.median(values)
-        spread = MAD_TO_SIGMA * np.median(np.abs(values - median))
-        if median > 0 and spread > CONSTANCY_LIMIT * median:
-            bones[j] = True
-            reasons.append(f"bone {skeleton.joints[j]} changes length by {spread / median:.0%} "
-                           "over the clip (a bone keeps its length)")
+    bones[child[changing]] = True
+    reasons = [f"bone {skeleton.joints[child[k]]} changes length by "
+               f"{spread[k] / median[k]:.0%} over the clip (a bone keeps its length)"
+               for k in np.flatnonzero(changing)]
     return reasons, bones
 
 

@@ -128,7 +128,7 @@ def test_the_quick_run_prints_every_target(bench, tmp_path, capsys, monkeypatch)
 
 
 def test_prefect_overhead_runs_one_task_per_clip_as_the_build(bench, capsys):
-    """The Prefect-alone figure comes from a real flow of one task per clip."""
+    """The Prefect-alone figure comes from a real flow whose one task per clip completed."""
     bench.child_prefect_overhead(5)
     figures = json.loads(capsys.readouterr().out.strip().splitlines()[-1])
     assert figures["tasks"] == 5
