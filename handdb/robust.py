@@ -19,8 +19,8 @@ def nan_median(values: np.ndarray, axis: int = 0, keepdims: bool = False) -> np.
 
     The values of ``numpy.nanmedian`` (the mean of the two middle ranks of the finite
     samples, each rank taken once when their count is odd), from one sort along ``axis``
-    (NaN sorts last) instead of its masked-array median, which costs five times as much
-    on a clip's few hundred frames.
+    (NaN sorts last) instead of its masked-array median, which is much slower on a clip's
+    few hundred frames.
 
     Parameters
     ----------

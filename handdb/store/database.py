@@ -94,10 +94,9 @@ def encode(data: pa.Table) -> bytes:
 
     zstd with column statistics; only the string columns are dictionary-encoded (a clip's
     few ids, joint and method names repeat on every row). A number column is written plain:
-    its values rarely repeat, so a dictionary of it is about as long as the column and
-    indices come on top. Trying one for every number column cost more than half the
-    encoding (per 300-frame clip's seven files 11 -> 7.5 ms, per 5000-frame clip 122 -> 55
-    ms) and left the files about a fifth larger.
+    its values rarely repeat, so a dictionary of it is about as long as the column, its
+    indices come on top, and trying one costs much of the encoding
+    (``benchmarks/RESULTS.md``).
     """
     strings = [field.name for field in data.schema if pa.types.is_string(field.type)]
     sink = pa.BufferOutputStream()
