@@ -50,6 +50,7 @@ from scipy.spatial.transform import Rotation
 from handdb.errors import SkeletonError
 from handdb.hand.shape import mean_shape
 from handdb.hand.skeletons import FINGERS, Skeleton
+from handdb.vectors import cross, dot, norm
 
 #: Below this bend (angle between consecutive finger bones), the flexion plane of a finger
 #: is blended towards the palm's reference axis: radians.
@@ -101,44 +102,8 @@ def child_counts(skeleton: Skeleton) -> np.ndarray:
     return np.bincount(skeleton.parents[skeleton.parents >= 0], minlength=skeleton.n_joints)
 
 
-# The vector arithmetic over the last axis of 3 is written out component by component:
-# numpy's reductions over so short an axis (``np.sum``, ``np.linalg.norm``) and
-# ``np.cross`` cost several times the arithmetic. The components are summed from the
-# first, as those reductions sum them, and crossed as ``np.cross`` does, so every value
-# is the same to the last bit.
-
-
-def _sum_of_products(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """``a * b`` of 3-vectors summed over the last axis from the first component."""
-    return (a[..., 0] * b[..., 0] + a[..., 1] * b[..., 1]) + a[..., 2] * b[..., 2]
-
-
-def _dot(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """``np.sum(a * b, axis=-1)`` of 3-vectors ``(..., 3)``, broadcasting: ``(...)``.
-
-    numpy's sum starts from ``+0``, so a sum of ``-0`` terms is ``+0``: adding ``0.0``
-    changes nothing else.
-    """
-    return _sum_of_products(a, b) + 0.0
-
-
-def _norm(v: np.ndarray) -> np.ndarray:
-    """``np.linalg.norm(v, axis=-1)`` of 3-vectors ``(..., 3)``: ``(...)``.
-
-    Squares are never ``-0``, so their sum needs no ``+0``.
-    """
-    return np.sqrt(_sum_of_products(v, v))
-
-
-def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """``np.cross(a, b)`` of 3-vectors ``(..., 3)``, broadcasting: ``(..., 3)``."""
-    return np.stack([a[..., 1] * b[..., 2] - a[..., 2] * b[..., 1],
-                     a[..., 2] * b[..., 0] - a[..., 0] * b[..., 2],
-                     a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]], axis=-1)
-
-
 def _unit(v: np.ndarray) -> np.ndarray:
-    return v / np.maximum(_norm(v)[..., None], _EPS)
+    return v / np.maximum(norm(v)[..., None], _EPS)
 
 
 def _frame_from_axes(x_hint: np.ndarray, y: np.ndarray, fallback_hint: np.ndarray) -> np.ndarray:
@@ -148,11 +113,11 @@ def _frame_from_axes(x_hint: np.ndarray, y: np.ndarray, fallback_hint: np.ndarra
     to ``y``, ``fallback_hint`` stands in for it.
     """
     y = _unit(y)
-    x = x_hint - _dot(x_hint, y)[..., None] * y
-    fallback = fallback_hint - _dot(fallback_hint, y)[..., None] * y
-    degenerate = _norm(x)[..., None] < 1e-6 * np.maximum(_norm(x_hint)[..., None], _EPS)
+    x = x_hint - dot(x_hint, y)[..., None] * y
+    fallback = fallback_hint - dot(fallback_hint, y)[..., None] * y
+    degenerate = norm(x)[..., None] < 1e-6 * np.maximum(norm(x_hint)[..., None], _EPS)
     x = _unit(np.where(degenerate, fallback, x))
-    return np.stack([x, y, _cross(x, y)], axis=-1)
+    return np.stack([x, y, cross(x, y)], axis=-1)
 
 
 def palm_joints(skeleton: Skeleton) -> tuple[int, np.ndarray]:
@@ -189,7 +154,7 @@ def palm_frame(xyz: np.ndarray, skeleton: Skeleton) -> np.ndarray:
     wrist, mcps = palm_joints(skeleton)
     y = xyz[:, mcps].mean(axis=1) - xyz[:, wrist]
     lateral = xyz[:, mcps[0]] - xyz[:, mcps[-1]]
-    return _frame_from_axes(lateral, y, _cross(y, np.array([0.0, 0.0, 1.0])))
+    return _frame_from_axes(lateral, y, cross(y, np.array([0.0, 0.0, 1.0])))
 
 
 def _finger_hinge_axes(
@@ -205,11 +170,11 @@ def _finger_hinge_axes(
         roles = [skeleton.roles[j] for j in chain]
         plane_joints = chain[roles.index("mcp"):] if "mcp" in roles else chain
         bones = np.diff(xyz[:, plane_joints], axis=1)
-        normal = _cross(bones[:, :-1], bones[:, 1:]).sum(axis=1)
-        lengths = _norm(bones)
+        normal = cross(bones[:, :-1], bones[:, 1:]).sum(axis=1)
+        lengths = norm(bones)
         scale = (lengths[:, :-1] * lengths[:, 1:]).sum(axis=1)
-        bend = _norm(normal) / np.maximum(scale, _EPS)
-        cosine = _dot(_unit(normal), reference)
+        bend = norm(normal) / np.maximum(scale, _EPS)
+        cosine = dot(_unit(normal), reference)
         weight = (np.clip(bend / np.sin(PLANE_BLEND_BEND), 0.0, 1.0)
                   * np.clip(np.abs(cosine) / PLANE_TRUSTED_COSINE, 0.0, 1.0))[:, None]
         signed_normal = np.where(cosine < 0, -1.0, 1.0)[:, None] * _unit(normal)
@@ -302,7 +267,7 @@ def joint_rotations(
     offsets = np.einsum("tbji,tbj->tbi", frames[:, bone_parents],
                         xyz[:, bone_children] - xyz[:, bone_parents])
     lengths = (np.broadcast_to(bone_lengths[bone_children], offsets.shape[:2]) if keep_lengths
-               else _norm(offsets))
+               else norm(offsets))
     along_bone = child_counts(skeleton)[bone_parents] == 1
     translations[:, bone_children[along_bone], 1] = lengths[:, along_bone]
     translations[:, bone_children[~along_bone]] = (lengths[:, ~along_bone, None]
