@@ -19,6 +19,7 @@ from handdb.hand.skeletons import Skeleton
 from handdb.lifting.result import LiftResult
 from handdb.store import tables
 from handdb.validation.chart import draw_comparison_chart
+from handdb.vectors import norm
 
 #: Bones whose true depth span is below this are left out of the sign accuracy, metres.
 SIGN_THRESHOLD_M = 0.005
@@ -56,7 +57,7 @@ def joint_errors(truth: np.ndarray, estimate: np.ndarray, skeleton: Skeleton,
     valid = np.isfinite(dz)
     n = valid.sum(axis=0)
     masked = np.where(valid, dz, np.nan)
-    position = np.linalg.norm(est_rel - true_rel, axis=-1)
+    position = norm(est_rel - true_rel)
 
     parents = np.where(skeleton.parents < 0, root, skeleton.parents)
     true_bone = truth[..., 2] - truth[:, parents, 2]
