@@ -15,19 +15,27 @@ import numpy as np
 _SEQUENTIAL_TERMS = 8
 
 
-def _sum_of_squares(v: np.ndarray) -> np.ndarray:
-    total = v[..., 0] * v[..., 0]
-    for k in range(1, v.shape[-1]):
-        total = total + v[..., k] * v[..., k]
+def _sum_of_products(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """``a * b`` summed over the last axis from its first component."""
+    total = a[..., 0] * b[..., 0]
+    for k in range(1, a.shape[-1]):
+        total = total + a[..., k] * b[..., k]
     return total
 
 
+def _short(a: np.ndarray, b: np.ndarray) -> bool:
+    """Whether numpy sums the last axis of ``a * b`` one term after another."""
+    return a.shape[-1] == b.shape[-1] and 0 < a.shape[-1] < _SEQUENTIAL_TERMS
+
+
 def dot(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """``np.sum(a * b, axis=-1)`` of 3-vectors ``(..., 3)``, broadcasting: ``(...)``.
+    """``np.sum(a * b, axis=-1)`` of vectors ``(..., D)``, the other axes broadcast: ``(...)``.
 
     A sum of ``-0`` terms is ``+0``, as numpy's (adding ``0.0`` changes nothing else).
     """
-    return ((a[..., 0] * b[..., 0] + a[..., 1] * b[..., 1]) + a[..., 2] * b[..., 2]) + 0.0
+    if not _short(a, b):
+        return np.sum(a * b, axis=-1)
+    return _sum_of_products(a, b) + 0.0
 
 
 def norm(v: np.ndarray) -> np.ndarray:
@@ -35,9 +43,9 @@ def norm(v: np.ndarray) -> np.ndarray:
 
     Squares are never ``-0``, so their sum needs no ``+0``.
     """
-    if not 0 < v.shape[-1] < _SEQUENTIAL_TERMS:
+    if not _short(v, v):
         return np.linalg.norm(v, axis=-1)
-    return np.sqrt(_sum_of_squares(v))
+    return np.sqrt(_sum_of_products(v, v))
 
 
 def cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:

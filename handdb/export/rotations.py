@@ -219,7 +219,7 @@ def joint_frames(xyz: np.ndarray, skeleton: Skeleton) -> np.ndarray:
 
 def _continuous_sign(quaternions: np.ndarray) -> np.ndarray:
     """Flip quaternions ``(T, J, 4)`` so consecutive frames lie in the same hemisphere."""
-    same = np.sum(quaternions[1:] * quaternions[:-1], axis=-1) >= 0
+    same = dot(quaternions[1:], quaternions[:-1]) >= 0
     signs = np.cumprod(np.where(same, 1.0, -1.0), axis=0)
     return quaternions * np.concatenate([np.ones((1, *signs.shape[1:])), signs])[..., None]
 

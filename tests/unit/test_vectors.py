@@ -47,3 +47,11 @@ def test_norm_of_any_length_is_numpys(size):
     values = _vectors(np.random.default_rng(size), (2000, 4, size))
     with np.errstate(all="ignore"):
         assert norm(values).tobytes() == np.linalg.norm(values, axis=-1).tobytes()
+
+
+@pytest.mark.parametrize("size", [1, 2, 4, 7, 8, 12])
+def test_dot_of_any_length_is_numpys(size):
+    rng = np.random.default_rng(size)
+    a, b = _vectors(rng, (2000, 4, size)), _vectors(rng, (2000, 4, size))
+    with np.errstate(all="ignore"):
+        assert dot(a, b).tobytes() == np.sum(a * b, axis=-1).tobytes()
