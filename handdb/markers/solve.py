@@ -72,8 +72,8 @@ RECOVERY_DISTANCE_MM = 4.0 * MARKER_CUTOFF_MM
 #: fractions of their range (0 straight, 1 fully flexed), its other angles at rest.
 RESTART_FLEXION = (0.0, 0.5, 0.9)
 
-#: Turns of the aligned rest hand a first pose starts again from when the alignment left a
-#: visible marker far off: the 24 rotations of the cube (none more than 63° from any
+#: Turns of the aligned rest hand a first pose starts again from when the alignment left the
+#: visible markers far off on average: the 24 rotations of the cube (none more than 63° from any
 #: orientation, so one start lies in each orientation's valley of the local fit).
 ROOT_RESTARTS = tuple(Rotation.create_group("O"))
 
@@ -342,16 +342,20 @@ def fit_pose_lsq(model: HandModel, observed: np.ndarray, visible: np.ndarray,
     return result.x
 
 
-def initial_pose(model: HandModel, observed: np.ndarray, visible: np.ndarray) -> np.ndarray:
+def initial_pose(model: HandModel, observed: np.ndarray, visible: np.ndarray, *,
+                 restart: bool = True) -> np.ndarray:
     """Find a first pose for a frame with no predecessor (the paper's ICP plus IK start).
 
     The rest pose is rigidly aligned to the visible markers (Kabsch, labelled markers; the
-    palm's when at least three are visible, else all), then fitted by least squares. When
-    that fit leaves a visible marker more than :data:`RECOVERY_DISTANCE_MM` from its joint
-    the alignment was wrong (three skin markers on the back of a hand, or a fist's markers
-    matched to a flat hand, fix its rotation poorly), and the fit starts again from the
-    aligned hand turned by each rotation of :data:`ROOT_RESTARTS`, fingers at each share of
-    :data:`ROOT_RESTART_FLEXION`; the pose of lowest objective is kept.
+    palm's when at least three are visible, else all), then fitted by least squares. A
+    finger that fit leaves far from its markers the tracker starts again itself
+    (:func:`fit_pose_recovering`); when the visible markers are on average more than
+    :data:`RECOVERY_DISTANCE_MM` from their joints, the whole hand is off: the alignment
+    was wrong (three skin markers on the back of a hand fix its rotation poorly, and a
+    fist's fingers do not unfold together from a flat hand). The fit then starts again from
+    the aligned hand turned by each rotation of :data:`ROOT_RESTARTS`, fingers at each
+    share of :data:`ROOT_RESTART_FLEXION`; the pose
+    of lowest objective is kept.
 
     Parameters
     ----------
@@ -359,6 +363,9 @@ def initial_pose(model: HandModel, observed: np.ndarray, visible: np.ndarray) ->
         The hand model (bone lengths in mm).
     observed, visible
         ``(J, 3)`` markers in mm and ``(J,) bool``; at least three visible.
+    restart
+        Start again from the turned hands when the whole hand is off; ``False`` returns the
+        aligned start's fit as it is.
 
     Returns
     -------
@@ -375,7 +382,7 @@ def initial_pose(model: HandModel, observed: np.ndarray, visible: np.ndarray) ->
     rotation, _ = Rotation.align_vectors(observed[use] - data_centre, rest[use] - model_centre)
     pose = fit_pose_lsq(model, observed, visible, _placed(model, rotation, model_centre,
                                                           data_centre, 0.0), None)
-    if _worst_distance(model, pose, observed, visible) <= RECOVERY_DISTANCE_MM:
+    if not restart or _mean_distance(model, pose, observed, visible) <= RECOVERY_DISTANCE_MM:
         return pose
     best = _robust_cost(model, pose, observed, visible, None, 0.0, MARKER_CUTOFF_MM)
     for turn in ROOT_RESTARTS:
@@ -404,11 +411,11 @@ def _placed(model: HandModel, rotation: Rotation, model_centre: np.ndarray,
     return pose
 
 
-def _worst_distance(model: HandModel, pose: np.ndarray, observed: np.ndarray,
-                    visible: np.ndarray) -> float:
-    """The largest distance from a visible marker to its joint at ``pose``, mm."""
+def _mean_distance(model: HandModel, pose: np.ndarray, observed: np.ndarray,
+                   visible: np.ndarray) -> float:
+    """The mean distance from the visible markers to their joints at ``pose``, mm."""
     return float(np.linalg.norm(forward_kinematics(model, pose)[visible] - observed[visible],
-                                axis=-1).max())
+                                axis=-1).mean())
 
 
 def _robust_cost(model: HandModel, pose: np.ndarray, observed: np.ndarray,

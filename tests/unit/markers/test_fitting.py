@@ -126,11 +126,12 @@ def test_initial_pose_finds_a_pose_far_from_rest(model, known):
     assert errors[visible].max() < 0.5
 
 
-@pytest.mark.parametrize("seed", [0, 2])
+@pytest.mark.parametrize("seed", [3, 4])
 def test_initial_pose_finds_a_fist_seen_through_a_gloves_markers(model, seed):
     # the Qualisys glove's marker set: three on the back of the hand, the thumb's IP and tip,
-    # each finger's DIP and tip. Aligned to a flat hand and fitted from there, a fist's
-    # fingers stay in the wrong valley, more than 100 mm from their markers
+    # each finger's DIP and tip. Aligned to a flat hand on its three palm markers and fitted
+    # from there, these fists end with 10 of 13 markers about 100 mm off: the whole hand,
+    # not one finger, is off, and a calibration takes its first poses as they come
     skeleton = model.skeleton
     glove = ["wrist", "index_mcp", "little_mcp", "thumb_ip", "thumb_tip"] + [
         f"{finger}_{joint}" for finger in ("index", "middle", "ring", "little")
