@@ -116,9 +116,10 @@ def test_limit_weight_keeps_calibration_poses_the_tracker_can_take(model):
 
 
 def test_a_shape_the_tracker_reaches_is_kept_as_calibrated_free(model, capture, calibration):
-    # markers on the joints: the bounded tracker fits the calibration frames to the noise,
+    # markers on the joints: the bounded first poses come within the cut-off of the
+    # calibration frames' markers (not to the noise: a finger may start in a wrong valley),
     # so the calibration is not run again with the bounds weighed
-    assert bounded_reach(calibration, capture) < min(1.5, REACH_LIMIT_MM)
+    assert bounded_reach(calibration, capture) < REACH_LIMIT_MM
     kept = calibrate_reachable(model, capture)
     np.testing.assert_array_equal(kept.model.bone_lengths, calibration.model.bone_lengths)
 
