@@ -17,6 +17,11 @@ MEDIAN_EFFICIENCY = float(np.sqrt(np.pi / 2.0))
 def nan_median(values: np.ndarray, axis: int = 0, keepdims: bool = False) -> np.ndarray:
     """Median along ``axis`` ignoring NaN; NaN, without a warning, where no sample is finite.
 
+    The values of ``numpy.nanmedian`` (the mean of the two middle ranks of the finite
+    samples, each rank taken once when their count is odd), from one sort along ``axis``
+    (NaN sorts last) instead of its masked-array median, which is much slower on a clip's
+    few hundred frames.
+
     Parameters
     ----------
     values
@@ -25,10 +30,26 @@ def nan_median(values: np.ndarray, axis: int = 0, keepdims: bool = False) -> np.
         The axis of the samples.
     keepdims
         Keep ``axis`` with length 1.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``values``'s shape without ``axis`` (with it of length 1 if ``keepdims``), in its
+        unit and dtype; a scalar for samples in one dimension.
     """
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", RuntimeWarning)
-        return np.nanmedian(values, axis=axis, keepdims=keepdims)
+    values = np.asarray(values)
+    if values.shape[axis] == 0:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", RuntimeWarning)
+            return np.nanmedian(values, axis=axis, keepdims=keepdims)
+    ordered = np.sort(values, axis=axis)
+    counts = np.sum(~np.isnan(values), axis=axis, keepdims=True)
+    low = np.take_along_axis(ordered, np.maximum(counts - 1, 0) // 2, axis=axis)
+    high = np.take_along_axis(ordered, counts // 2, axis=axis)
+    median = (low + high) / 2.0
+    if not keepdims:
+        median = np.squeeze(median, axis=axis)
+    return median[()] if median.ndim == 0 else median
 
 
 def robust_spread(values: np.ndarray, axis: int = 0) -> np.ndarray:

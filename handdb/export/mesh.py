@@ -128,6 +128,22 @@ def finger_radii(skeleton: Skeleton, span: float) -> dict[str, float]:
     return {f: FINGER_RADIUS_RATIO * FINGER_RADIUS_SCALE.get(f, 1.0) * span for f in fingers}
 
 
+@functools.cache
+def _ring_directions() -> tuple[np.ndarray, np.ndarray]:
+    """The unit profile and the section directions of :func:`_capsule_rings`.
+
+    ``(P, 2) float64`` (cosine, sine) of the profile's angles and ``(S, 2) float64`` of the
+    turns about ``+Z``, as trimesh computes them; they depend on :data:`CAPSULE_COUNT`
+    alone. Read, never written.
+    """
+    rings, sections = CAPSULE_COUNT
+    theta = np.concatenate((np.linspace(-np.pi / 2.0, 0.0, rings // 2 + 1),
+                            np.linspace(0.0, np.pi / 2.0, rings // 2 + 1)))
+    turn = np.linspace(0.0, 2.0 * np.pi, sections + 1)[:-1]
+    return (np.column_stack((np.cos(theta), np.sin(theta))),
+            np.column_stack((np.cos(turn), np.sin(turn))))
+
+
 def _capsule_rings(length: float, radius: float) -> np.ndarray:
     """A capsule's points along ``+Z`` about the origin, as trimesh computes them.
 
@@ -136,16 +152,12 @@ def _capsule_rings(length: float, radius: float) -> np.ndarray:
     before it merges the copies of each pole: ``(S P, 3) float64``, ``length`` units, ring
     by ring.
     """
-    rings, sections = CAPSULE_COUNT
-    theta = np.concatenate((np.linspace(-np.pi / 2.0, 0.0, rings // 2 + 1),
-                            np.linspace(0.0, np.pi / 2.0, rings // 2 + 1)))
-    profile = np.column_stack((np.cos(theta), np.sin(theta))) * radius
+    unit_profile, around = _ring_directions()
+    profile = unit_profile * radius
     half = len(profile) // 2
     profile[:half, 1] -= length / 2.0
     profile[half:, 1] += length / 2.0
-    turn = np.linspace(0.0, 2.0 * np.pi, sections + 1)[:-1]
-    around = np.column_stack((np.cos(turn), np.sin(turn)))               # (S, 2)
-    points = np.empty((sections, len(profile), 3))
+    points = np.empty((len(around), len(profile), 3))
     points[..., :2] = around[:, None, :] * profile[None, :, 0, None]
     points[..., 2] = profile[:, 1]
     return points.reshape(-1, 3)
@@ -165,28 +177,53 @@ def _capsule_topology() -> tuple[np.ndarray, np.ndarray]:
     return np.argmax(same, axis=1), np.asarray(reference.faces, dtype=np.int64)
 
 
-def _capsule(start: np.ndarray, end: np.ndarray,
-             radius: float) -> tuple[np.ndarray, np.ndarray]:
-    """A capsule whose sphere centres are ``start`` and ``end``: its vertices and faces.
+def _capsules(starts: np.ndarray, ends: np.ndarray,
+              radii: np.ndarray) -> list[tuple[np.ndarray, np.ndarray]]:
+    """Capsules whose sphere centres are ``starts`` and ``ends``: each one's vertices and faces.
 
-    The mesh ``trimesh.creation.capsule`` makes, point for point, without building a
-    ``Trimesh`` for it (that costs ten times the arithmetic). A capsule whose smallest
-    face is within :data:`CAPSULE_AREA_MARGIN` of trimesh's merge tolerance is left to
-    trimesh, which drops faces and merges points at that tolerance. Returns
-    ``(V, 3) float64`` vertices in the units of ``start`` and ``(F, 3) int64`` faces.
+    The meshes ``trimesh.creation.capsule`` makes, point for point, without building a
+    ``Trimesh`` for each (that costs ten times the arithmetic); the smallest faces of all
+    of them are measured in one call. A capsule whose smallest face is within
+    :data:`CAPSULE_AREA_MARGIN` of trimesh's merge tolerance is left to trimesh, which
+    drops faces and merges points at that tolerance.
+
+    Parameters
+    ----------
+    starts, ends
+        ``(B, 3) float64``: the capsules' axis ends, any length unit.
+    radii
+        ``(B,) float64``, the unit of ``starts``.
+
+    Returns
+    -------
+    list
+        Per capsule, ``(V, 3) float64`` vertices in the unit of ``starts`` and
+        ``(F, 3) int64`` faces.
     """
-    axis = end - start
-    length = float(np.linalg.norm(axis))
-    transform = trimesh.geometry.align_vectors([0.0, 0.0, 1.0], axis / length)
-    transform[:3, 3] = (start + end) / 2
     kept, faces = _capsule_topology()
-    placed = trimesh.transformations.transform_points(_capsule_rings(length, radius),
-                                                      transform)[kept]
-    if trimesh.triangles.area(placed[faces]).min() > CAPSULE_AREA_MARGIN * trimesh.tol.merge:
-        return placed, faces
-    small = trimesh.creation.capsule(height=length, radius=radius, count=CAPSULE_COUNT,
-                                     transform=transform)
-    return small.vertices, np.asarray(small.faces, dtype=np.int64)
+    placements = []
+    for start, end, radius in zip(starts, ends, radii, strict=True):
+        axis = end - start
+        length = float(np.linalg.norm(axis))
+        transform = trimesh.geometry.align_vectors([0.0, 0.0, 1.0], axis / length)
+        transform[:3, 3] = (start + end) / 2
+        placed = trimesh.transformations.transform_points(_capsule_rings(length, radius),
+                                                          transform)[kept]
+        placements.append((placed, transform, length))
+    if not placements:
+        return []
+    triangles = np.concatenate([placed[faces] for placed, _, _ in placements])
+    smallest = trimesh.triangles.area(triangles).reshape(len(placements), -1).min(axis=1)
+    capsules = []
+    for (placed, transform, length), radius, least in zip(placements, radii, smallest,
+                                                          strict=True):
+        if least > CAPSULE_AREA_MARGIN * trimesh.tol.merge:
+            capsules.append((placed, faces))
+            continue
+        small = trimesh.creation.capsule(height=length, radius=radius, count=CAPSULE_COUNT,
+                                         transform=transform)
+        capsules.append((small.vertices, np.asarray(small.faces, dtype=np.int64)))
+    return capsules
 
 
 def hand_mesh(skeleton: Skeleton, bone_lengths: np.ndarray) -> HandMesh:
@@ -210,9 +247,10 @@ def hand_mesh(skeleton: Skeleton, bone_lengths: np.ndarray) -> HandMesh:
     radii = finger_radii(skeleton, span)
 
     parts, indices, weights, face_joints = [], [], [], []
-    for parent, child in bones:
-        radius = radii[skeleton.fingers[child]]
-        vertices, faces = _capsule(rest[parent], rest[child], radius)
+    capsule_radii = np.array([radii[skeleton.fingers[child]] for child in bones[:, 1]])
+    capsules = _capsules(rest[bones[:, 0]], rest[bones[:, 1]], capsule_radii)
+    for (parent, child), radius, (vertices, faces) in zip(bones, capsule_radii, capsules,
+                                                          strict=True):
         direction = (rest[child] - rest[parent]) / bone_lengths[child]
         along = (vertices - rest[parent]) @ direction
         own = np.clip(0.5 + along / (2 * radius), 0.0, 1.0)

@@ -50,6 +50,7 @@ from scipy.spatial.transform import Rotation
 from handdb.errors import SkeletonError
 from handdb.hand.shape import mean_shape
 from handdb.hand.skeletons import FINGERS, Skeleton
+from handdb.vectors import cross, dot, norm
 
 #: Below this bend (angle between consecutive finger bones), the flexion plane of a finger
 #: is blended towards the palm's reference axis: radians.
@@ -102,7 +103,7 @@ def child_counts(skeleton: Skeleton) -> np.ndarray:
 
 
 def _unit(v: np.ndarray) -> np.ndarray:
-    return v / np.maximum(np.linalg.norm(v, axis=-1, keepdims=True), _EPS)
+    return v / np.maximum(norm(v)[..., None], _EPS)
 
 
 def _frame_from_axes(x_hint: np.ndarray, y: np.ndarray, fallback_hint: np.ndarray) -> np.ndarray:
@@ -112,12 +113,11 @@ def _frame_from_axes(x_hint: np.ndarray, y: np.ndarray, fallback_hint: np.ndarra
     to ``y``, ``fallback_hint`` stands in for it.
     """
     y = _unit(y)
-    x = x_hint - np.sum(x_hint * y, axis=-1, keepdims=True) * y
-    fallback = fallback_hint - np.sum(fallback_hint * y, axis=-1, keepdims=True) * y
-    degenerate = np.linalg.norm(x, axis=-1, keepdims=True) < 1e-6 * np.maximum(
-        np.linalg.norm(x_hint, axis=-1, keepdims=True), _EPS)
+    x = x_hint - dot(x_hint, y)[..., None] * y
+    fallback = fallback_hint - dot(fallback_hint, y)[..., None] * y
+    degenerate = norm(x)[..., None] < 1e-6 * np.maximum(norm(x_hint)[..., None], _EPS)
     x = _unit(np.where(degenerate, fallback, x))
-    return np.stack([x, y, np.cross(x, y)], axis=-1)
+    return np.stack([x, y, cross(x, y)], axis=-1)
 
 
 def palm_joints(skeleton: Skeleton) -> tuple[int, np.ndarray]:
@@ -154,7 +154,7 @@ def palm_frame(xyz: np.ndarray, skeleton: Skeleton) -> np.ndarray:
     wrist, mcps = palm_joints(skeleton)
     y = xyz[:, mcps].mean(axis=1) - xyz[:, wrist]
     lateral = xyz[:, mcps[0]] - xyz[:, mcps[-1]]
-    return _frame_from_axes(lateral, y, np.cross(y, [0.0, 0.0, 1.0]))
+    return _frame_from_axes(lateral, y, cross(y, np.array([0.0, 0.0, 1.0])))
 
 
 def _finger_hinge_axes(
@@ -170,11 +170,11 @@ def _finger_hinge_axes(
         roles = [skeleton.roles[j] for j in chain]
         plane_joints = chain[roles.index("mcp"):] if "mcp" in roles else chain
         bones = np.diff(xyz[:, plane_joints], axis=1)
-        normal = np.cross(bones[:, :-1], bones[:, 1:]).sum(axis=1)
-        lengths = np.linalg.norm(bones, axis=-1)
+        normal = cross(bones[:, :-1], bones[:, 1:]).sum(axis=1)
+        lengths = norm(bones)
         scale = (lengths[:, :-1] * lengths[:, 1:]).sum(axis=1)
-        bend = np.linalg.norm(normal, axis=-1) / np.maximum(scale, _EPS)
-        cosine = np.sum(_unit(normal) * reference, axis=-1)
+        bend = norm(normal) / np.maximum(scale, _EPS)
+        cosine = dot(_unit(normal), reference)
         weight = (np.clip(bend / np.sin(PLANE_BLEND_BEND), 0.0, 1.0)
                   * np.clip(np.abs(cosine) / PLANE_TRUSTED_COSINE, 0.0, 1.0))[:, None]
         signed_normal = np.where(cosine < 0, -1.0, 1.0)[:, None] * _unit(normal)
@@ -219,7 +219,7 @@ def joint_frames(xyz: np.ndarray, skeleton: Skeleton) -> np.ndarray:
 
 def _continuous_sign(quaternions: np.ndarray) -> np.ndarray:
     """Flip quaternions ``(T, J, 4)`` so consecutive frames lie in the same hemisphere."""
-    same = np.sum(quaternions[1:] * quaternions[:-1], axis=-1) >= 0
+    same = dot(quaternions[1:], quaternions[:-1]) >= 0
     signs = np.cumprod(np.where(same, 1.0, -1.0), axis=0)
     return quaternions * np.concatenate([np.ones((1, *signs.shape[1:])), signs])[..., None]
 
@@ -267,7 +267,7 @@ def joint_rotations(
     offsets = np.einsum("tbji,tbj->tbi", frames[:, bone_parents],
                         xyz[:, bone_children] - xyz[:, bone_parents])
     lengths = (np.broadcast_to(bone_lengths[bone_children], offsets.shape[:2]) if keep_lengths
-               else np.linalg.norm(offsets, axis=-1))
+               else norm(offsets))
     along_bone = child_counts(skeleton)[bone_parents] == 1
     translations[:, bone_children[along_bone], 1] = lengths[:, along_bone]
     translations[:, bone_children[~along_bone]] = (lengths[:, ~along_bone, None]

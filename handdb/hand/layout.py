@@ -8,6 +8,7 @@ import numpy as np
 
 from handdb.errors import SkeletonError
 from handdb.hand.skeletons import FINGERS, Skeleton
+from handdb.vectors import cross, norm
 
 #: Roles of joints that sit on the near-rigid palm (with the long fingers' MCP joints).
 PALM_ROLES = frozenset({"wrist", "palm_fold", "palm_center", "cmc"})
@@ -96,7 +97,7 @@ def unit_vectors(vectors: np.ndarray) -> np.ndarray:
     not as numpy's 0/0 with a ``RuntimeWarning``.
     """
     vectors = np.asarray(vectors, dtype=np.float64)
-    norms = np.linalg.norm(vectors, axis=-1, keepdims=True)
+    norms = norm(vectors)[..., None]
     return np.divide(vectors, norms, out=np.full_like(vectors, np.nan), where=norms > 0)
 
 
@@ -119,9 +120,9 @@ def palm_normals(wrist: np.ndarray, index_mcp: np.ndarray, little_mcp: np.ndarra
         degenerate palm has no plane) or one is absent.
     """
     across, along = index_mcp - wrist, little_mcp - wrist
-    normal = np.cross(across, along)
-    spans = np.linalg.norm(across, axis=-1) * np.linalg.norm(along, axis=-1)
-    sine = np.divide(np.linalg.norm(normal, axis=-1), spans, out=np.zeros_like(spans),
+    normal = cross(across, along)
+    spans = norm(across) * norm(along)
+    sine = np.divide(norm(normal), spans, out=np.zeros_like(spans),
                      where=spans > 0)
     # rounding leaves collinear points a cross product of about 1e-16 of their spans,
     # which normalises into a direction that means nothing

@@ -19,6 +19,7 @@ import numpy as np
 
 from handdb.errors import BoneLengthError, SkeletonError
 from handdb.paths import SCHEMAS_DIR
+from handdb.vectors import norm
 
 SKELETONS_DIR = SCHEMAS_DIR / "skeletons"
 
@@ -205,7 +206,7 @@ def frame_bone_lengths(positions: np.ndarray, skeleton: Skeleton) -> np.ndarray:
     """
     lengths = np.full(positions.shape[:2], np.nan)
     parent, child = skeleton.bones.T
-    lengths[:, child] = np.linalg.norm(positions[:, child] - positions[:, parent], axis=-1)
+    lengths[:, child] = norm(positions[:, child] - positions[:, parent])
     return lengths
 
 

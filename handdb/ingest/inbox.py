@@ -334,9 +334,17 @@ def clip_content_hash(entry: ClipEntry) -> str:
 
 
 def _dense(rows: Observations | Positions, values: np.ndarray, n_frames: int) -> np.ndarray:
-    """Scatter per-row ``values`` ``(N, ...)`` into ``(T, J, ...)``, NaN elsewhere."""
-    dense = np.full((n_frames, rows.skeleton.n_joints) + values.shape[1:], np.nan)
-    dense[rows.frame, rows.joint] = values
+    """Scatter per-row ``values`` ``(N, ...)`` into ``(T, J, ...)``, NaN elsewhere.
+
+    Rows that give every (frame, joint) once in order (a complete long-form file) are
+    ``values`` reshaped, copied without the scatter.
+    """
+    shape = (n_frames, rows.skeleton.n_joints) + values.shape[1:]
+    flat = rows.frame * rows.skeleton.n_joints + rows.joint
+    if flat.size == n_frames * rows.skeleton.n_joints and np.all(flat[1:] > flat[:-1]):
+        return np.array(values, dtype=np.float64).reshape(shape)
+    dense = np.full(shape, np.nan)
+    dense.reshape((-1,) + values.shape[1:])[flat] = values
     return dense
 
 

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 from collections.abc import Callable, Collection, Mapping, Sequence
 from dataclasses import dataclass, field
+from functools import cached_property
 from pathlib import Path
 
 import numpy as np
@@ -162,6 +163,21 @@ def _distinct(values: np.ndarray) -> np.ndarray:
     return np.unique(values)
 
 
+#: The largest finite float64: only an infinity's magnitude exceeds it.
+_LARGEST_FINITE = float(np.finfo(np.float64).max)
+
+
+def _exceeds(values: np.ndarray, limit: float) -> bool:
+    """Whether a value of ``values`` ``(N,) float64`` has a magnitude above ``limit``.
+
+    NaN (a missing value) exceeds nothing. Two reductions instead of a boolean array of
+    ``N``: the checks then locate the first such value only in a file that has one.
+    """
+    if not values.size:
+        return False
+    return bool(np.fmax.reduce(values) > limit or np.fmin.reduce(values) < -limit)
+
+
 @dataclass(frozen=True, kw_only=True)
 class _Rows:
     """Row bookkeeping shared by :class:`Observations` and :class:`Positions`."""
@@ -273,6 +289,8 @@ class _Rows:
             At the first such coordinate, naming its row and field.
         """
         values = self._coordinates()
+        if not any(_exceeds(column, limit) for column in values.values()):
+            return
         arrays = np.stack(list(values.values()), axis=1)
         beyond = np.argwhere(np.abs(arrays) > limit)
         if beyond.size:
@@ -281,6 +299,8 @@ class _Rows:
                              f"plausible coordinate (limit {limit:g} {unit})")
 
     def _check_not_infinite(self, values: dict[str, np.ndarray]) -> None:
+        if not any(_exceeds(column, _LARGEST_FINITE) for column in values.values()):
+            return
         arrays = np.stack(list(values.values()), axis=1)
         infinite = np.argwhere(np.isinf(arrays))
         if infinite.size:
@@ -352,10 +372,12 @@ class Observations(_Rows):
             raise self.error(row, "confidence",
                              f"confidence {self.confidence[row]} lies outside [0, 1]")
 
-    @property
+    @cached_property
     def uv(self) -> np.ndarray:
-        """``(N, 2) float64`` pixels."""
-        return np.stack([self.u, self.v], axis=1)
+        """``(N, 2) float64`` pixels, read-only (built once: ingest reads it three times)."""
+        uv = np.stack([self.u, self.v], axis=1)
+        uv.flags.writeable = False
+        return uv
 
     def _coordinates(self) -> dict[str, np.ndarray]:
         return {"u": self.u, "v": self.v}
@@ -412,6 +434,8 @@ class Positions(_Rows):
         if self.xyz.shape != (self.n_rows, 3):
             raise ValueError(f"xyz must have shape ({self.n_rows}, 3)")
         self._check_not_infinite(dict(zip("xyz", self.xyz.T, strict=True)))
+        if not self.xyz.size or not np.isnan(self.xyz.min()):
+            return
         missing = np.argwhere(np.isnan(self.xyz))
         if missing.size:
             row, axis = missing[0]

@@ -18,15 +18,6 @@ from handdb.compiled import kernel
 from handdb.hand.skeletons import Skeleton
 
 
-def dot3(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """Dot product of 3-vectors over the last axis, broadcasting the others.
-
-    Written out component by component: a reduction over an axis of length 3 costs several
-    times more.
-    """
-    return a[..., 0] * b[..., 0] + a[..., 1] * b[..., 1] + a[..., 2] * b[..., 2]
-
-
 def projected_lengths(uv: np.ndarray, skeleton: Skeleton) -> np.ndarray:
     """Image length of the bone ending at each joint, ``(T, J) float64`` pixels (root: 0).
 

@@ -29,7 +29,7 @@ reprojection residuals, are then the palm's two tilt states
 (:mod:`handdb.lifting.palm_states`).
 
 The pose fits and the template update run in compiled kernels (:mod:`handdb.compiled`),
-one frame at a time.
+one frame at a time; the pose fit's steps are inlined into its frame loop.
 """
 
 from __future__ import annotations
@@ -39,7 +39,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from handdb.compiled import kernel
+from handdb.compiled import inline_kernel, kernel
 
 #: Frames of the clip that inform the template, evenly spread: its 3(K - 1) unknowns are
 #: overdetermined many times by a few hundred frames, and the rest of a long clip only
@@ -173,7 +173,7 @@ def _fit_tilts(points, template, basis, rotation, scale, residual):
             residual[t, 0], residual[t, 1] = residual[t, 1], residual[t, 0]
 
 
-@kernel
+@inline_kernel
 def _centre(points, template, weight, centred, shape):
     """Image points and template about their weighted centroids (``centred``, ``shape``)."""
     total = mean_u = mean_v = mean_x = mean_y = mean_z = 0.0
@@ -195,7 +195,7 @@ def _centre(points, template, weight, centred, shape):
         shape[k, 2] = template[k, 2] - mean_z / total
 
 
-@kernel
+@inline_kernel
 def _necker_pair(centred, shape, weight, basis, pair, rows):
     """Both scaled-orthographic poses of a near-planar template in closed form.
 
@@ -254,7 +254,7 @@ def _necker_pair(centred, shape, weight, basis, pair, rows):
     return s
 
 
-@kernel
+@inline_kernel
 def _pose_cost(centred, shape, weight, rotation, s):
     """Summed squared image residual of a pose, pixels²."""
     cost = 0.0
@@ -269,7 +269,7 @@ def _pose_cost(centred, shape, weight, rotation, s):
     return cost
 
 
-@kernel
+@inline_kernel
 def _polish_pose(centred, shape, weight, rotation, scale, scratch):
     """Levenberg-Marquardt over a pose's rotation (left increment) and scale, in place.
 
@@ -332,7 +332,7 @@ def _polish_pose(centred, shape, weight, rotation, scale, scratch):
     return math.sqrt(cost / visible)
 
 
-@kernel
+@inline_kernel
 def _solve_spd4(matrix, rhs, out, low):
     """Solve the symmetric positive-definite 4x4 ``matrix @ out = rhs`` (Cholesky in ``low``)."""
     for i in range(4):
@@ -356,7 +356,7 @@ def _solve_spd4(matrix, rhs, out, low):
         out[i] = total / low[i, i]
 
 
-@kernel
+@inline_kernel
 def _rotation_vector(wx, wy, wz, out):
     """Rotation matrix of the rotation vector ``(wx, wy, wz)`` (Rodrigues) into ``out``."""
     angle = math.sqrt(wx * wx + wy * wy + wz * wz)

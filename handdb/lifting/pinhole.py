@@ -22,8 +22,9 @@ import numpy as np
 from handdb.clip import Camera, finite_points
 from handdb.compiled import kernel
 from handdb.hand.skeletons import Skeleton
-from handdb.lifting.geometry import dot3, intrinsics
+from handdb.lifting.geometry import intrinsics
 from handdb.lifting.temporal import smooth_scale
+from handdb.vectors import dot
 
 #: The root depth is searched within these factors of the weak-perspective guess.
 DEPTH_BRACKET = (0.5, 3.0)
@@ -78,10 +79,10 @@ def ray_roots(origin: np.ndarray, ray: np.ndarray,
     excess
         ``(...) float64`` >= 0, clip units: by how much the ray misses the sphere.
     """
-    a = dot3(ray, ray)
-    b = dot3(ray, origin)
+    a = dot(ray, ray)
+    b = dot(ray, origin)
     nearest = b / a
-    miss_sq = np.clip(dot3(origin, origin) - b * nearest, 0.0, None)
+    miss_sq = np.clip(dot(origin, origin) - b * nearest, 0.0, None)
     half_chord = np.sqrt(np.clip(length**2 - miss_sq, 0.0, None) / a)
     far = ray * (nearest + half_chord)[..., None]
     near = ray * (nearest - half_chord)[..., None]

@@ -230,9 +230,14 @@ def _mixture_log_likelihood(heights, grid, spreads, floor, out):
     """Fill ``out`` ``(H, S)`` with the mixture's log-likelihood per clip height and spread.
 
     ``Σ_n log(½ N(h₊ₙ; grid[i], spreads[s]) + ½ N(h₋ₙ; ...) + floor)`` over the ``(2, N)``
-    ``heights``; see :func:`clip_heights`.
+    ``heights``; see :func:`clip_heights`. A frame both of whose log densities are below
+    :func:`_negligible_log_density` adds ``log(floor)`` without its two exponentials: its
+    density is below half a unit in the last place of ``floor``, so ``density + floor``
+    rounds to ``floor`` and the sum is the same to the last bit.
     """
     n_points = heights.shape[1]
+    log_floor = math.log(floor)
+    negligible = _negligible_log_density(floor)
     for i in range(grid.shape[0]):
         for s in range(spreads.shape[0]):
             sd = spreads[s]
@@ -241,7 +246,25 @@ def _mixture_log_likelihood(heights, grid, spreads, floor, out):
             for n in range(n_points):
                 above = (heights[0, n] - grid[i]) / sd
                 below = (heights[1, n] - grid[i]) / sd
-                density = 0.5 * (math.exp(-0.5 * above * above - log_norm)
-                                 + math.exp(-0.5 * below * below - log_norm))
+                log_above = -0.5 * above * above - log_norm
+                log_below = -0.5 * below * below - log_norm
+                if log_above < negligible and log_below < negligible:
+                    total += log_floor
+                    continue
+                density = 0.5 * (math.exp(log_above) + math.exp(log_below))
                 total += math.log(density + floor)
             out[i, s] = total
+
+
+@kernel
+def _negligible_log_density(floor):
+    """Log density below which a frame's mixture density cannot change ``density + floor``.
+
+    ``floor`` (``> 0``) has a unit in the last place of at least ``floor · 2⁻⁵³``; a
+    density below ``floor · 2⁻⁵⁴`` (half of it) rounds away. The bound is taken a factor
+    ``e`` lower, for the rounding of ``exp`` and of the half-sum of the two densities.
+    Returns ``-inf`` (nothing is negligible) when ``floor`` is not positive.
+    """
+    if not floor > 0.0:
+        return -math.inf
+    return math.log(floor) - 54.0 * math.log(2.0) - 1.0

@@ -90,9 +90,18 @@ _HASH_CHUNK = 1 << 20
 
 
 def encode(data: pa.Table) -> bytes:
-    """The bytes of ``data`` as the store writes a Parquet file."""
+    """The bytes of ``data`` as the store writes a Parquet file.
+
+    zstd with column statistics; only the string columns are dictionary-encoded (a clip's
+    few ids, joint and method names repeat on every row). A number column is written plain:
+    its values rarely repeat, so a dictionary of it is about as long as the column, its
+    indices come on top, and trying one costs much of the encoding
+    (``benchmarks/RESULTS.md``).
+    """
+    strings = [field.name for field in data.schema if pa.types.is_string(field.type)]
     sink = pa.BufferOutputStream()
-    pq.write_table(data, sink, compression="zstd", write_statistics=True)
+    pq.write_table(data, sink, compression="zstd", write_statistics=True,
+                   use_dictionary=strings)
     return sink.getvalue().to_pybytes()
 
 

@@ -38,6 +38,7 @@ from handdb.hand import anatomy
 from handdb.hand.layout import palm_normals, unit_vectors
 from handdb.hand.skeletons import FINGERS, Skeleton
 from handdb.robust import nan_median, robust_spread
+from handdb.vectors import cross, dot, norm
 
 #: Hand lengths (distal wrist crease to the middle fingertip) the gate admits, mm: from a
 #: small adult hand to a very large one.
@@ -210,7 +211,7 @@ def check_constancy(skeleton: Skeleton, xyz: np.ndarray) -> tuple[list[str], np.
         ``(T, J, 3) float64``: the clip's 3D joints, any unit; NaN where absent.
     """
     parent, child = skeleton.bones.T
-    per_frame = np.linalg.norm(xyz[:, child] - xyz[:, parent], axis=-1)
+    per_frame = norm(xyz[:, child] - xyz[:, parent])
     measured = np.isfinite(per_frame).sum(axis=0) >= 2
     median = nan_median(per_frame)
     spread = robust_spread(per_frame)
@@ -248,7 +249,7 @@ def flexion_angles(skeleton: Skeleton, xyz: np.ndarray, hand: str
     angles = {}
     for finger, hinges in _HINGES.items():
         mcp = skeleton.index(f"{finger}_mcp")
-        lateral = unit_vectors(np.cross(xyz[:, mcp] - xyz[:, wrist], normal))
+        lateral = unit_vectors(cross(xyz[:, mcp] - xyz[:, wrist], normal))
         for key in hinges:
             name = f"{finger}_{key[1]}"
             if name not in skeleton.joints:
@@ -259,12 +260,12 @@ def flexion_angles(skeleton: Skeleton, xyz: np.ndarray, hand: str
                 continue
             before = xyz[:, j] - xyz[:, skeleton.parents[j]]
             after = xyz[:, children[0]] - xyz[:, j]
-            turn = np.cross(before, after)
-            cos = np.sum(before * after, axis=-1)
+            turn = cross(before, after)
+            cos = dot(before, after)
             if finger == "thumb":
-                angles[key] = np.degrees(np.arctan2(np.linalg.norm(turn, axis=-1), cos))
+                angles[key] = np.degrees(np.arctan2(norm(turn), cos))
                 continue
-            angles[key] = np.degrees(np.arctan2(np.sum(turn * lateral, axis=-1), cos))
+            angles[key] = np.degrees(np.arctan2(dot(turn, lateral), cos))
     return angles
 
 
@@ -439,8 +440,8 @@ def check_joint_order(skeleton: Skeleton, xyz: np.ndarray) -> tuple[list[str], n
     if base is None or thumb is None:
         return reasons, rows
     index, little = xyz[:, knuckles[0]], xyz[:, knuckles[-1]]
-    near_index = np.linalg.norm(thumb - index, axis=-1)
-    near_little = np.linalg.norm(thumb - little, axis=-1)
+    near_index = norm(thumb - index)
+    near_little = norm(thumb - little)
     seen_both = np.isfinite(near_index) & np.isfinite(near_little)
     wrong = seen_both & (near_little < near_index)
     if seen_both.any() and wrong.sum() > ORDER_SHARE_LIMIT * seen_both.sum():

@@ -25,3 +25,21 @@ def test_a_column_without_samples_is_nan_and_silent():
         medians, spread = nan_median(values), robust_spread(values)
     assert medians[0] == 3.0 and np.isnan(medians[1])
     assert spread[0] == pytest.approx(1.4826) and np.isnan(spread[1])
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_the_median_is_numpys_to_the_last_bit(seed):
+    rng = np.random.default_rng(seed)
+    shape = tuple(rng.integers(1, 40, size=rng.integers(1, 4)))
+    values = rng.normal(10.0, 3.0, shape).round(rng.integers(0, 3))   # ties among samples
+    values[rng.random(shape) < rng.uniform(0.0, 0.6)] = np.nan
+    if values.ndim > 1:
+        values[(slice(None),) * (values.ndim - 1) + (0,)] = np.nan   # columns without samples
+    for axis in range(values.ndim):
+        for keepdims in (False, True):
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore", RuntimeWarning)
+                expected = np.nanmedian(values, axis=axis, keepdims=keepdims)
+            median = nan_median(values, axis=axis, keepdims=keepdims)
+            assert np.shape(median) == np.shape(expected)
+            assert np.asarray(median).tobytes() == np.asarray(expected).tobytes()

@@ -5,7 +5,7 @@ import trimesh
 from handdb.clip import METERS_PER_UNIT
 from handdb.export.mesh import (
     CAPSULE_COUNT,
-    _capsule,
+    _capsules,
     hand_mesh,
     knuckle_span,
     posed_hand_mesh,
@@ -125,19 +125,28 @@ def test_the_palm_and_fingers_have_a_hands_proportions(hand):
         assert radius * mm >= 5.5, name                          # no hair-thin finger
 
 
-@pytest.mark.parametrize("size", [2e-4, 1e-3, 0.02, 1.0, 30.0])
-def test_capsules_are_trimesh_capsules_point_for_point(size):
-    # metres to millimetres, and below a millimetre where trimesh drops faces
-    rng = np.random.default_rng(int(size * 1e4))
-    for _ in range(10):
-        start = rng.normal(size=3) * size
-        end = start + rng.normal(size=3) * size
-        radius = size * rng.uniform(0.1, 0.6)
-        vertices, faces = _capsule(start, end, radius)
-        length = float(np.linalg.norm(end - start))
-        transform = trimesh.geometry.align_vectors([0.0, 0.0, 1.0], (end - start) / length)
-        transform[:3, 3] = (start + end) / 2
-        expected = trimesh.creation.capsule(height=length, radius=radius,
-                                            count=CAPSULE_COUNT, transform=transform)
+def _trimesh_capsule(start, end, radius):
+    length = float(np.linalg.norm(end - start))
+    transform = trimesh.geometry.align_vectors([0.0, 0.0, 1.0], (end - start) / length)
+    transform[:3, 3] = (start + end) / 2
+    return trimesh.creation.capsule(height=length, radius=radius, count=CAPSULE_COUNT,
+                                    transform=transform)
+
+
+@pytest.mark.parametrize("sizes", [[2e-4], [1e-3], [0.02], [1.0], [30.0],
+                                   [30.0, 2e-4, 1.0, 1e-3]])
+def test_capsules_are_trimesh_capsules_point_for_point(sizes):
+    # metres to millimetres, and below a millimetre where trimesh drops faces; the last
+    # batch mixes capsules computed here with capsules left to trimesh
+    rng = np.random.default_rng(int(sizes[0] * 1e4) + len(sizes))
+    size = np.repeat(sizes, 10 // len(sizes) + 1)[:10, None]
+    starts = rng.normal(size=(10, 3)) * size
+    ends = starts + rng.normal(size=(10, 3)) * size
+    radii = size[:, 0] * rng.uniform(0.1, 0.6, 10)
+    capsules = _capsules(starts, ends, radii)
+    assert len(capsules) == 10
+    for (vertices, faces), start, end, radius in zip(capsules, starts, ends, radii,
+                                                     strict=True):
+        expected = _trimesh_capsule(start, end, radius)
         assert np.array_equal(vertices, expected.vertices)
         assert np.array_equal(faces, expected.faces)

@@ -10,8 +10,9 @@ import numpy as np
 import pytest
 
 from handdb.clip import Camera
-from handdb.hand.skeletons import bone_length_array, load_skeleton
+from handdb.hand.skeletons import bone_length_array, frame_bone_lengths, load_skeleton
 from handdb.lifting import lift
+from handdb.lifting.geometry import accumulate_depths, projected_lengths
 from handdb.synthetic.clips import synthesize_clip
 from tests.support import real_data
 from tests.unit.lifting.conftest import ORTHOGRAPHIC
@@ -103,7 +104,9 @@ DHG_SHORTFALL = {
     "orthographic": "DHG's tracker bones vary by up to 15 mm; facing the camera as the thesis "
                     "assumes, its distal bones come out in the image plane (a clamped depth, "
                     "counted as a wrong sign) more often at the template's scale than at "
-                    "eq. 6's, and lose to it on four bones",
+                    "eq. 6's (156 clamped signs against 75), and lose to it on three bones; "
+                    "the little middle phalanx is flipped instead (38 frames against 28), "
+                    "where the tracker flexes the little MCP or PIP past its range of motion",
     "pinhole": "the per-frame plane fit flips DHG's non-rigid palm centre behind the wrist "
                "in 2 of 95 frames (wrist->palm 97.9 against 100 %)",
 }
@@ -113,6 +116,27 @@ def test_the_default_is_as_good_as_the_thesis_on_every_dhg_bone(dhg_errors, requ
     camera, errors = dhg_errors
     request.applymarker(pytest.mark.xfail(strict=True, reason=DHG_SHORTFALL[camera]))
     assert losing_bones(errors) == {}
+
+
+def test_the_default_s_signs_meet_the_target_on_dhg_once_its_tracker_s_lengths_are_known(
+        dhg_mm):
+    """DHG in its own view misses the orthographic target through its tracker's lengths,
+    not its signs: the default's depth signs, with each bone's span from its true length in
+    that frame (eq. 5 at the view's scale, 1 px per mm), put it within the target
+    (benchmarks/RESULTS-real.md, 2026-12-03)."""
+    skeleton = load_skeleton("dhg22")
+    lengths = real_data.median_bone_lengths(dhg_mm, skeleton)
+    uv, camera = dhg_view(dhg_mm, "orthographic")
+    lifted = lift(uv, skeleton, lengths, camera, method="kinematic", hand="right").xyz
+    parents = np.where(skeleton.parents < 0, skeleton.root, skeleton.parents)
+    sign = np.where(lifted[..., 2] < lifted[:, parents, 2], -1.0, 1.0)
+    span = np.sqrt(np.clip(frame_bone_lengths(dhg_mm, skeleton) ** 2
+                           - projected_lengths(uv, skeleton) ** 2, 0.0, None))
+    span[:, skeleton.root] = 0.0
+    relifted = np.concatenate([uv, accumulate_depths(sign * span, skeleton)[..., None]], axis=-1)
+    errors = real_data.Errors(skeleton)
+    errors.add(dhg_mm, relifted)
+    assert errors.summary()["all"]["dz"] <= TARGET_DZ_MM
 
 
 #: Noisy DHG: pixel noise and the seeds of its draws (those of

@@ -1,9 +1,18 @@
 """The thumb base's height over the rigid palm: per frame, and one for the whole clip."""
 
+import math
+
 import numpy as np
 import pytest
 
-from handdb.lifting.thumb_base import HEIGHT_GRID, clip_heights, plane_heights
+from handdb.lifting.thumb_base import (
+    HEIGHT_GRID,
+    SPREAD_GRID,
+    _mixture_log_likelihood,
+    clip_heights,
+    outlier_density,
+    plane_heights,
+)
 
 #: Wrist, index MCP, little MCP and two more knuckles of a right palm in the plane z = 0,
 #: seen from its palmar side along +z (camera frame: x right, y down).
@@ -41,3 +50,30 @@ def test_the_clip_height_is_the_one_every_frame_offers(truth):
     modes, spread = clip_heights(heights)
     assert abs(modes[0] - truth) <= 2 * (HEIGHT_GRID[1] - HEIGHT_GRID[0])
     assert spread < 0.03
+
+
+def _plain_log_likelihood(heights, grid, spreads, floor):
+    """The mixture's log-likelihood term by term, every exponential taken, ``(H, S)``."""
+    out = np.empty((len(grid), len(spreads)))
+    for i, centre in enumerate(grid):
+        for s, sd in enumerate(spreads):
+            log_norm = math.log(sd * math.sqrt(2.0 * math.pi))
+            total = 0.0
+            for above, below in zip((heights[0] - centre) / sd, (heights[1] - centre) / sd,
+                                    strict=True):
+                density = 0.5 * (math.exp(-0.5 * above * above - log_norm)
+                                 + math.exp(-0.5 * below * below - log_norm))
+                total += math.log(density + floor)
+            out[i, s] = total
+    return out
+
+
+@pytest.mark.parametrize("floor", [outlier_density(), 1e-300, 0.0])
+def test_skipping_negligible_densities_leaves_the_likelihood_unchanged(floor):
+    rng = np.random.default_rng(5)
+    heights = np.stack([rng.normal(0.1, 0.02, 40), rng.uniform(-0.6, 0.6, 40)])
+    grid, spreads = HEIGHT_GRID[::8], SPREAD_GRID
+    out = np.empty((len(grid), len(spreads)))
+    _mixture_log_likelihood(heights, grid, spreads, floor, out)
+    expected = _plain_log_likelihood(heights, grid, spreads, floor)
+    np.testing.assert_array_equal(out, expected)

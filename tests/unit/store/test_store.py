@@ -3,12 +3,13 @@ import sys
 import threading
 from importlib import import_module
 
+import pyarrow as pa
 import pyarrow.parquet as pq
 import pytest
 
 from handdb.errors import DatabaseLockedError, SchemaError, StoreError
 from handdb.store import tables
-from handdb.store.database import CLIP_TABLES, LOCK_FILE, Store
+from handdb.store.database import CLIP_TABLES, LOCK_FILE, Store, encode
 from handdb.store.query import connect, query
 from tests.support.store_rows import clip_row, truth_rows
 
@@ -205,3 +206,16 @@ def test_macros_order_fingers_anatomically_and_scale_units_to_mm(tmp_path):
                  for unit in (*METERS_PER_UNIT, "furlong")}
     assert [f for (f,) in fingers] == [*FINGERS, "palm"]
     assert scale == {"mm": 1.0, "cm": 10.0, "m": 1000.0, "in": 25.4, "furlong": None}
+
+
+def test_only_string_columns_are_dictionary_encoded_and_the_rows_read_back():
+    rows = truth_rows("c", 3)
+    parquet = pq.ParquetFile(pa.BufferReader(encode(rows)))
+    encodings = {parquet.metadata.row_group(0).column(i).path_in_schema:
+                 parquet.metadata.row_group(0).column(i).encodings
+                 for i in range(parquet.metadata.num_columns)}
+    strings = {f.name for f in rows.schema if pa.types.is_string(f.type)}
+    assert strings == {"clip_id", "joint"}
+    for column, used in encodings.items():
+        assert ("RLE_DICTIONARY" in used) == (column in strings), column
+    assert parquet.read().equals(rows)

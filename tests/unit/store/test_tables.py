@@ -76,3 +76,16 @@ def test_from_columns_broadcasts_scalars_and_takes_arrow_arrays():
     assert table.column("clip_id").to_pylist() == ["c", "c"]
     assert table.column("x").to_pylist() == [1.5, 1.5]
     assert table.column("frame").to_pylist() == [0, 1]
+
+
+def test_a_conformed_table_is_conformed_again_as_it_is():
+    columns = {"clip_id": "c", "frame": [1, 0], "joint": ["wrist", "wrist"],
+               "joint_index": [0, 0], "x": [1.0, 2.0], "y": [0.0, 0.0], "z": [3, 4]}
+    table = tables.from_columns("truth_3d", columns)
+    assert tables.conform("truth_3d", table) is table
+    with pytest.raises(SchemaError, match="missing columns"):
+        tables.conform("joint_ratios", table)       # remembered per table name
+    unsorted = pa.table({**{k: table.column(k) for k in table.column_names},
+                         "frame": pa.array([1, 0], pa.int64())})
+    again = tables.conform("truth_3d", unsorted.select(table.column_names))
+    assert again.column("frame").to_pylist() == [0, 1]    # an equal-looking table is checked

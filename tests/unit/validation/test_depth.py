@@ -4,6 +4,7 @@ import pytest
 from handdb.hand.skeletons import load_skeleton
 from handdb.lifting import LiftResult
 from handdb.validation.depth import (
+    _column_statistics,
     clip_summary,
     comparison_chart,
     markdown_summary,
@@ -67,3 +68,19 @@ def test_summary_markdown_and_chart(clip):
     assert "| noisy |" in text and "c1" in text
     png = comparison_chart("c1", table, skeleton)
     assert png[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+@pytest.mark.parametrize("n_frames", [1, 3, 300])
+def test_column_statistics_are_numpys_nan_reductions_bit_for_bit(n_frames):
+    rng = np.random.default_rng(n_frames)
+    values = np.abs(rng.normal(0.0, 10.0, (n_frames, 6))) * np.logspace(-3, 3, 6)
+    values[rng.random(values.shape) < 0.3] = np.nan
+    values[:, 2] = np.nan
+    values[0, 4] = 7.25
+    some = np.isfinite(values).any(axis=0)
+    got = _column_statistics(values)
+    for reduce, column in zip((np.nanmin, np.nanmax, np.nanmean, np.nanstd), got, strict=True):
+        expected = np.full(values.shape[1], np.nan)
+        expected[some] = reduce(values[:, some], axis=0)
+        assert column.tobytes() == expected.tobytes()
+    assert _column_statistics(values, spread=False)[2].tobytes() == got[2].tobytes()
