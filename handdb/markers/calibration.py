@@ -405,7 +405,10 @@ def calibrate_reachable(model: HandModel, markers: np.ndarray, *,
     When the bounded tracker comes no closer than :data:`REACH_LIMIT_MM` to the calibration
     frames' markers (:func:`bounded_reach`), the shape was bought with poses it cannot take;
     the clip is calibrated again with the poses' angles beyond the bounds weighed
-    (:data:`LIMIT_PRIOR_MM_PER_RAD`), and the calibration of the closer reach is kept.
+    (:data:`LIMIT_PRIOR_MM_PER_RAD`). Of the two, the one whose worse error, its own fit of
+    the calibration frames or the tracker's reach of them, is smaller is kept: a shape the
+    tracker reaches is no better if it no longer fits the markers (a tracked hand whose
+    palm changes shape over the clip fits no rigid shape in bounded poses).
 
     Parameters and returns as :func:`calibrate`.
     """
@@ -416,7 +419,13 @@ def calibrate_reachable(model: HandModel, markers: np.ndarray, *,
         return free
     bounded = calibrate(model, markers, n_frames=n_frames, ratio_prior=ratio_prior,
                         limit_weight=LIMIT_PRIOR_MM_PER_RAD)
-    return bounded if bounded_reach(bounded, markers) < free_reach else free
+    bounded_error = max(_fit_error(bounded), bounded_reach(bounded, markers))
+    return bounded if bounded_error < max(_fit_error(free), free_reach) else free
+
+
+def _fit_error(calibration: Calibration) -> float:
+    """Mean over bones of the calibration's RMS marker error at the bone's child, mm."""
+    return float(np.nanmean(calibration.residual))
 
 
 def calibrated_bone_lengths(calibration: Calibration, units: str) -> BoneLengths:
