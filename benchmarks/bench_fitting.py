@@ -25,7 +25,9 @@ markers per frame, no bone lengths given:
 Run: ``OPENBLAS_NUM_THREADS=1 .venv/bin/python benchmarks/bench_fitting.py [n_frames]
 [sections] [limit_weight]`` with ``sections`` a comma-separated subset of :data:`SECTIONS`
 (default all) and ``limit_weight`` the calibration's weight of joint angles beyond the
-bounds (mm/rad, default 0: off; the held-out capture always runs the default).
+bounds (mm/rad, default: weighed only where the tracker cannot reach the free calibration,
+:func:`handdb.markers.calibration.calibrate_reachable`; the held-out capture always runs the
+default).
 """
 
 from __future__ import annotations
@@ -129,7 +131,7 @@ POPULATION_SEEDS = range(6)
 POPULATION_FRAMES = 60
 
 
-def population(limit_weight: float = 0.0) -> None:
+def population(limit_weight: float | None = None) -> None:
     rows = []
     for seed in POPULATION_SEEDS:
         clip = synthesize_clip("random", POPULATION_FRAMES, seed=seed)
@@ -148,7 +150,7 @@ def population(limit_weight: float = 0.0) -> None:
           f"hidden {mean[2]:.2f} mm")
 
 
-def dhg_sample(limit_weight: float = 0.0) -> None:
+def dhg_sample(limit_weight: float | None = None) -> None:
     path = DHG / "skeletons_world.txt"
     if not path.is_file():
         print("DHG sample: absent, skipped")
@@ -175,14 +177,14 @@ def dhg_sample(limit_weight: float = 0.0) -> None:
               f"{rate:.2f} frames/s")
 
 
-def timed_fit(markers: np.ndarray, hand: str, limit_weight: float):
+def timed_fit(markers: np.ndarray, hand: str, limit_weight: float | None):
     """Fit ``markers`` (``(T, J, 3)`` mm, NaN hidden) with no lengths; the fit and frames/s."""
     start = time.perf_counter()
     fit = fit_markers(markers, hand=hand, units="mm", calibration_limit_weight=limit_weight)
     return fit, len(markers) / (time.perf_counter() - start)
 
 
-def interhand(limit_weight: float = 0.0) -> None:
+def interhand(limit_weight: float | None = None) -> None:
     if not INTERHAND.is_file():
         print("InterHand2.6M: absent, skipped")
         return
@@ -212,7 +214,7 @@ def interhand(limit_weight: float = 0.0) -> None:
               f"{median[1]:.2f}, {median[2]:.2f})")
 
 
-def glove(limit_weight: float = 0.0) -> None:
+def glove(limit_weight: float | None = None) -> None:
     if not GLOVE.is_file():
         print("Qualisys glove: absent, skipped")
         return
@@ -250,7 +252,7 @@ SECTIONS = ("held_out", "population", "dhg", "interhand", "glove")
 if __name__ == "__main__":
     frames = int(sys.argv[1]) if len(sys.argv) > 1 else 150
     chosen = sys.argv[2].split(",") if len(sys.argv) > 2 else SECTIONS
-    weight = float(sys.argv[3]) if len(sys.argv) > 3 else 0.0
+    weight = float(sys.argv[3]) if len(sys.argv) > 3 else None
     runs = {"held_out": lambda _: held_out(frames), "population": population,
             "dhg": dhg_sample, "interhand": interhand, "glove": glove}
     for section in chosen:

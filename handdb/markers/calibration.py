@@ -25,10 +25,10 @@ and the frames are chosen where markers are plentiful and clean. The residuals a
   the gate then flags, and holding it short left the glove's fingers far from their
   markers;
 * optionally (``limit_weight``), each calibration pose's joint angles beyond the model's
-  bounds, so that the shape is one the bounded tracker can pose. Off by default: on the
-  Qualisys glove it cut the visible residual from 11.7 to 4.2 mm, but it made the
-  synthetic population's hidden joints worse (2.77 to 3.14 mm), see
-  ``benchmarks/RESULTS-fitting.md``.
+  bounds, so that the shape is one the bounded tracker can pose. Always on, it made the
+  synthetic population's hidden joints worse (2.77 to 3.14 mm); :func:`calibrate_reachable`
+  turns it on only for a shape the bounded tracker cannot pose (the Qualisys glove's skin
+  markers), see ``benchmarks/RESULTS-fitting.md``.
 
 The paper also calibrates each marker's offset from its joint. Here the markers are the
 joints (the ``mediapipe21`` marker set), so that freedom goes to the palm's shape instead,
@@ -47,7 +47,7 @@ from handdb.clip import finite_points
 from handdb.hand.model import N_DOF, HandModel, forward_kinematics
 from handdb.lengths.bone_lengths import BoneLengths
 from handdb.lengths.ratios import bone_ratios, table1_ratios
-from handdb.markers.solve import SOLVER_TOLERANCE, fit_pose_lsq, initial_pose
+from handdb.markers.solve import MARKER_CUTOFF_MM, SOLVER_TOLERANCE, fit_pose_lsq, initial_pose
 from handdb.robust import MEDIAN_EFFICIENCY, nan_median, robust_spread
 from handdb.validation.plausibility import length_bounds_mm
 
@@ -75,6 +75,11 @@ PALM_PRIOR_WEIGHT = 0.01
 #: bounded tracker cannot take (a finger twisted 60° at its knuckle) is a shape the tracker
 #: cannot fit; chosen a priori, not fitted to any capture.
 LIMIT_PRIOR_MM_PER_RAD = 100.0
+
+#: Mean visible-marker distance, mm, beyond which the bounded tracker is taken not to reach a
+#: calibrated shape (:func:`bounded_reach`): the marker term's cut-off, past which the
+#: robust loss hardly pulls.
+REACH_LIMIT_MM = MARKER_CUTOFF_MM
 
 #: Weight of a bone's length below the adult range, per mm: a millimetre short costs as
 #: much as a marker 100 mm off in one frame, so the range holds like a bound.
@@ -339,8 +344,11 @@ def calibrate(model: HandModel, markers: np.ndarray, *, n_frames: int = CALIBRAT
     start_model = model.with_geometry(prior_lengths)
     frames = select_frames(visible, n_frames)
     chosen = markers[frames]
-    poses = np.stack([fit_pose_lsq(start_model, obs, seen, initial_pose(start_model, obs, seen),
-                                   None)
+    # Poses free of the bounds can twist out of a wrong start; weighed, they must begin in
+    # the right valley, so only then are the first poses started again when far off.
+    poses = np.stack([fit_pose_lsq(start_model, obs, seen,
+                                   initial_pose(start_model, obs, seen,
+                                                restart=limit_weight > 0), None)
                       for obs, seen in zip(chosen, visible[frames], strict=True)])
     problem = _Problem(model, chosen, prior_lengths, length_pull_weights(spread, counts),
                        ratio_prior or default_ratio_prior(model), limit_weight)
@@ -359,6 +367,65 @@ def calibrate(model: HandModel, markers: np.ndarray, *, n_frames: int = CALIBRAT
     rms[n_seen > 0] = np.sqrt(squares.sum(axis=0)[n_seen > 0] / n_seen[n_seen > 0])
     return Calibration(model=calibrated, frames=frames, poses=fitted, residual=rms,
                        n_frames=counts)
+
+
+def bounded_reach(calibration: Calibration, markers: np.ndarray) -> float:
+    """How close the bounded tracker comes to the calibration frames' markers, mm.
+
+    Each calibration frame is fitted afresh within the joint bounds
+    (:func:`~handdb.markers.solve.initial_pose` on the calibrated model); the mean distance
+    of its visible markers to their joints, averaged over the frames. The calibration's own
+    poses are free of the bounds, so its residual alone cannot tell a shape the tracker can
+    pose from one it cannot.
+
+    Parameters
+    ----------
+    calibration
+        The result of :func:`calibrate` (mm).
+    markers
+        ``(T, J, 3)`` the clip's markers in mm, NaN where missing.
+    """
+    model = calibration.model
+    visible = finite_points(markers)
+    distances = []
+    for frame in calibration.frames:
+        seen = visible[frame]
+        pose = initial_pose(model, markers[frame], seen)
+        fitted = forward_kinematics(model, pose)[seen]
+        distances.append(np.linalg.norm(fitted - markers[frame][seen], axis=-1).mean())
+    return float(np.mean(distances))
+
+
+def calibrate_reachable(model: HandModel, markers: np.ndarray, *,
+                        n_frames: int = CALIBRATION_FRAMES,
+                        ratio_prior: tuple[np.ndarray, np.ndarray] | None = None
+                        ) -> Calibration:
+    """:func:`calibrate` with the poses free, bounded only if the tracker cannot reach it.
+
+    When the bounded tracker comes no closer than :data:`REACH_LIMIT_MM` to the calibration
+    frames' markers (:func:`bounded_reach`), the shape was bought with poses it cannot take;
+    the clip is calibrated again with the poses' angles beyond the bounds weighed
+    (:data:`LIMIT_PRIOR_MM_PER_RAD`). Of the two, the one whose worse error, its own fit of
+    the calibration frames or the tracker's reach of them, is smaller is kept: a shape the
+    tracker reaches is no better if it no longer fits the markers (a tracked hand whose
+    palm changes shape over the clip fits no rigid shape in bounded poses).
+
+    Parameters and returns as :func:`calibrate`.
+    """
+    markers = np.asarray(markers, dtype=np.float64)
+    free = calibrate(model, markers, n_frames=n_frames, ratio_prior=ratio_prior)
+    free_reach = bounded_reach(free, markers)
+    if free_reach <= REACH_LIMIT_MM:
+        return free
+    bounded = calibrate(model, markers, n_frames=n_frames, ratio_prior=ratio_prior,
+                        limit_weight=LIMIT_PRIOR_MM_PER_RAD)
+    bounded_error = max(_fit_error(bounded), bounded_reach(bounded, markers))
+    return bounded if bounded_error < max(_fit_error(free), free_reach) else free
+
+
+def _fit_error(calibration: Calibration) -> float:
+    """Mean over bones of the calibration's RMS marker error at the bone's child, mm."""
+    return float(np.nanmean(calibration.residual))
 
 
 def calibrated_bone_lengths(calibration: Calibration, units: str) -> BoneLengths:

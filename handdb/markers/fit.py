@@ -30,7 +30,12 @@ from handdb.hand.model import (
 from handdb.hand.skeletons import Skeleton
 from handdb.lengths.bone_lengths import BoneLengths
 from handdb.lifting.result import LiftResult
-from handdb.markers.calibration import Calibration, calibrate, calibrated_bone_lengths
+from handdb.markers.calibration import (
+    Calibration,
+    calibrate,
+    calibrate_reachable,
+    calibrated_bone_lengths,
+)
 from handdb.markers.solve import (
     SwarmSettings,
     carry_unconstrained,
@@ -108,7 +113,7 @@ def fit_markers(markers: np.ndarray, *, hand: str = "right", units: str = "mm",
                 bone_lengths: dict[str, float] | None = None, solver: str = DEFAULT_SOLVER,
                 key_step: int = KEY_STEP, correspondence: str = "labelled",
                 filter_passes: int = 1, settings: SwarmSettings | None = None,
-                seed: int = 0, calibration_limit_weight: float = 0.0) -> MarkerFit:
+                seed: int = 0, calibration_limit_weight: float | None = None) -> MarkerFit:
     """Fit the 33-DoF hand model to a marker track.
 
     Parameters
@@ -139,7 +144,9 @@ def fit_markers(markers: np.ndarray, *, hand: str = "right", units: str = "mm",
         Seed of the swarm's random numbers.
     calibration_limit_weight
         Weight of the calibration poses' angles beyond the joint bounds, mm per radian
-        (:func:`~handdb.markers.calibration.calibrate`'s ``limit_weight``).
+        (:func:`~handdb.markers.calibration.calibrate`'s ``limit_weight``); ``None``, the
+        default, weighs them only when the tracker cannot reach the free calibration
+        (:func:`~handdb.markers.calibration.calibrate_reachable`).
 
     Returns
     -------
@@ -155,7 +162,8 @@ def fit_markers(markers: np.ndarray, *, hand: str = "right", units: str = "mm",
                                  skeleton=skeleton)
         calibration = None
     else:
-        calibration = calibrate(template, mm, limit_weight=calibration_limit_weight)
+        calibration = (calibrate_reachable(template, mm) if calibration_limit_weight is None
+                       else calibrate(template, mm, limit_weight=calibration_limit_weight))
         model = calibration.model
     rich = np.flatnonzero(visible.sum(axis=1) >= MIN_START_MARKERS)
     if not rich.size:

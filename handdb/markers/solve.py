@@ -72,6 +72,15 @@ RECOVERY_DISTANCE_MM = 4.0 * MARKER_CUTOFF_MM
 #: fractions of their range (0 straight, 1 fully flexed), its other angles at rest.
 RESTART_FLEXION = (0.0, 0.5, 0.9)
 
+#: Turns of the aligned rest hand a first pose starts again from when the alignment left the
+#: visible markers far off on average: the 24 rotations of the cube (none more than 63° from any
+#: orientation, so one start lies in each orientation's valley of the local fit).
+ROOT_RESTARTS = tuple(Rotation.create_group("O"))
+
+#: Flexion of the fingers in those starts, as a share of the way from rest (0, straight) to
+#: the upper bound (1, fully flexed).
+ROOT_RESTART_FLEXION = (0.0, 0.5)
+
 
 @dataclass(frozen=True)
 class SwarmSettings:
@@ -333,11 +342,20 @@ def fit_pose_lsq(model: HandModel, observed: np.ndarray, visible: np.ndarray,
     return result.x
 
 
-def initial_pose(model: HandModel, observed: np.ndarray, visible: np.ndarray) -> np.ndarray:
+def initial_pose(model: HandModel, observed: np.ndarray, visible: np.ndarray, *,
+                 restart: bool = True) -> np.ndarray:
     """Find a first pose for a frame with no predecessor (the paper's ICP plus IK start).
 
     The rest pose is rigidly aligned to the visible markers (Kabsch, labelled markers; the
-    palm's when at least three are visible, else all), then fitted by least squares.
+    palm's when at least three are visible, else all), then fitted by least squares. A
+    finger that fit leaves far from its markers the tracker starts again itself
+    (:func:`fit_pose_recovering`); when the visible markers are on average more than
+    :data:`RECOVERY_DISTANCE_MM` from their joints, the whole hand is off: the alignment
+    was wrong (three skin markers on the back of a hand fix its rotation poorly, and a
+    fist's fingers do not unfold together from a flat hand). The fit then starts again from
+    the aligned hand turned by each rotation of :data:`ROOT_RESTARTS`, fingers at each
+    share of :data:`ROOT_RESTART_FLEXION`; the pose
+    of lowest objective is kept.
 
     Parameters
     ----------
@@ -345,6 +363,9 @@ def initial_pose(model: HandModel, observed: np.ndarray, visible: np.ndarray) ->
         The hand model (bone lengths in mm).
     observed, visible
         ``(J, 3)`` markers in mm and ``(J,) bool``; at least three visible.
+    restart
+        Start again from the turned hands when the whole hand is off; ``False`` returns the
+        aligned start's fit as it is.
 
     Returns
     -------
@@ -359,10 +380,42 @@ def initial_pose(model: HandModel, observed: np.ndarray, visible: np.ndarray) ->
     use = visible & palm if (visible & palm).sum() >= 3 else visible
     model_centre, data_centre = rest[use].mean(axis=0), observed[use].mean(axis=0)
     rotation, _ = Rotation.align_vectors(observed[use] - data_centre, rest[use] - model_centre)
+    pose = fit_pose_lsq(model, observed, visible, _placed(model, rotation, model_centre,
+                                                          data_centre, 0.0), None)
+    if not restart or _mean_distance(model, pose, observed, visible) <= RECOVERY_DISTANCE_MM:
+        return pose
+    best = _robust_cost(model, pose, observed, visible, None, 0.0, MARKER_CUTOFF_MM)
+    for turn in ROOT_RESTARTS:
+        for share in ROOT_RESTART_FLEXION:
+            begin = _placed(model, rotation * turn, model_centre, data_centre, share)
+            candidate = fit_pose_lsq(model, observed, visible, begin, None)
+            cost = _robust_cost(model, candidate, observed, visible, None, 0.0,
+                                MARKER_CUTOFF_MM)
+            if cost < best:
+                pose, best = candidate, cost
+    return pose
+
+
+def _placed(model: HandModel, rotation: Rotation, model_centre: np.ndarray,
+            data_centre: np.ndarray, share: float) -> np.ndarray:
+    """The rest pose turned about ``model_centre`` and moved onto ``data_centre`` (mm).
+
+    Its root rotation is ``rotation``; its flexion angles sit at ``share`` of the way from
+    rest (straight, 0) to their upper bound (fully flexed, 1).
+    """
     pose = model.rest_pose()
+    flexion = np.array([name.endswith(".flexion") for name in model.dof_names])
+    pose[flexion] = share * model.upper[flexion]
     pose[ROOT_ROTATION] = rotation.as_rotvec()
     pose[ROOT_POSITION] = data_centre - rotation.apply(model_centre)
-    return fit_pose_lsq(model, observed, visible, pose, None)
+    return pose
+
+
+def _mean_distance(model: HandModel, pose: np.ndarray, observed: np.ndarray,
+                   visible: np.ndarray) -> float:
+    """The mean distance from the visible markers to their joints at ``pose``, mm."""
+    return float(np.linalg.norm(forward_kinematics(model, pose)[visible] - observed[visible],
+                                axis=-1).mean())
 
 
 def _robust_cost(model: HandModel, pose: np.ndarray, observed: np.ndarray,

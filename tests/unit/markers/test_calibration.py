@@ -10,7 +10,10 @@ from handdb.markers.calibration import (
     LENGTH_PRIOR_WEIGHT,
     LIMIT_PRIOR_MM_PER_RAD,
     MARKER_DISTANCE_FLOOR_MM,
+    REACH_LIMIT_MM,
+    bounded_reach,
     calibrate,
+    calibrate_reachable,
     calibrated_bone_lengths,
     length_pull_weights,
     measured_lengths,
@@ -110,6 +113,15 @@ def test_limit_weight_keeps_calibration_poses_the_tracker_can_take(model):
     assert _excursion_deg(model, bounded.poses) < 2.0
     truth = np.array([clip.bone_lengths[b] for b in model.skeleton.bone_names])
     assert np.abs(bounded.model.bone_lengths - truth).mean() < 1.5
+
+
+def test_a_shape_the_tracker_reaches_is_kept_as_calibrated_free(model, capture, calibration):
+    # markers on the joints: the bounded first poses come within the cut-off of the
+    # calibration frames' markers (not to the noise: a finger may start in a wrong valley),
+    # so the calibration is not run again with the bounds weighed
+    assert bounded_reach(calibration, capture) < REACH_LIMIT_MM
+    kept = calibrate_reachable(model, capture)
+    np.testing.assert_array_equal(kept.model.bone_lengths, calibration.model.bone_lengths)
 
 
 def test_bone_never_seen_has_no_residual_and_no_warning(model, capture):
