@@ -86,12 +86,14 @@ class BatchFailed(StageFailed):
     """Writing some clips of a batch into the database failed; the others are recorded.
 
     ``failures`` holds each failed clip's :class:`StageFailed`; the first one's cause is
-    this error's ``__cause__``, so that a retry policy sees the ``OSError``.
+    this error's ``__cause__`` as well, so that a retry policy sees the ``OSError``.
     """
 
     def __init__(self, failures: dict[str, StageFailed]) -> None:
         first = next(iter(failures.values()))
-        super().__init__(first.clip_id, first.stage, first.__cause__ or first)
+        cause = first.__cause__ or first
+        super().__init__(first.clip_id, first.stage, cause)
+        self.__cause__ = cause
         self.failures = failures
 
 
