@@ -89,9 +89,9 @@ DESCRIPTION = """\
 Build the handdb database from an inbox folder of hand keypoint clips.
 
 New and changed clips are processed, one task per batch of consecutive small clips (a
-large clip has its own), each clip from its first changed stage (ingest, bone lengths,
-gap filling, lifting, validation, export); unchanged clips cost a hash each. Refused
-inputs go to the `quarantine` table, and every build writes a `runs` row.
+large clip has its own), each clip from its first changed stage (ingest, bone lengths, gap filling, lifting, validation, export); unchanged clips
+cost a hash each. Refused inputs go to the `quarantine` table, and every build writes a
+`runs` row.
 
 - **State**: *Completed*, *Completed with refusals* (some input was refused; the rest is
   built), or *Failed* (a stage failed on a clip); its message counts the clips.
