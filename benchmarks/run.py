@@ -69,9 +69,6 @@ QUERIES = {
     "one clip's frames": "SELECT * FROM joints_3d WHERE clip_id = 'q-0042' ORDER BY frame",
 }
 PREFECT_OVERHEAD_CLIPS = 100
-#: Bytes of input of a 300-frame clip with its ground truth (:func:`write_inbox`'s), as
-#: the overhead flow groups its empty clips into batches.
-SMALL_CLIP_BYTES = 864_000
 #: Where clips run in the measured builds, as ``handdb build --runner``.
 DEFAULT_RUNNER = "thread"
 #: The runner without Prefect (its builds skip the measure of Prefect's own cost).
@@ -301,11 +298,9 @@ def build(inbox: Path, db: Path, runner: str = DEFAULT_RUNNER) -> dict:
 def child_prefect_overhead(n_clips: int) -> None:
     """Print the seconds of a flow of empty tasks shaped like the build (the child side).
 
-    One task per batch of 300-frame clips, grouped by the build's own
-    :func:`~handdb.build.batches.batches` (each clip the bytes of a 300-frame clip with its
-    ground truth, :data:`SMALL_CLIP_BYTES`), kept in flight by the build's sliding window
-    and waited on through its own first-done helper, so the figure is what Prefect adds to
-    each clip of a build of small clips.
+    One task per clip, kept in flight by the build's own sliding window and waited on
+    through its own first-done helper, so the figure is what Prefect adds to each clip of
+    a build.
     """
     from handdb_flows.build import WINDOW_PER_WORKER, first_done
     from handdb_flows.settings import quick_flows
@@ -314,29 +309,25 @@ def child_prefect_overhead(n_clips: int) -> None:
     from prefect.task_runners import ThreadPoolTaskRunner
 
     from handdb.build import DEFAULT_WORKERS
-    from handdb.build.batches import batches
     from handdb.build.window import sliding_window
 
     @task(cache_policy=NO_CACHE)
-    def process(batch: tuple[int, ...]) -> int:
-        return len(batch)
+    def process(clip: int) -> int:
+        return clip
 
     @flow(task_runner=ThreadPoolTaskRunner(max_workers=DEFAULT_WORKERS))
-    def clips(n: int) -> tuple[int, int]:
-        """Run ``n`` clips' tasks; how many clips and tasks completed."""
+    def clips(n: int) -> int:
+        """Run ``n`` clips' tasks; how many completed."""
         window = DEFAULT_WORKERS * WINDOW_PER_WORKER
-        grouped = batches(list(range(n)), window,  # type: ignore[arg-type]
-                          size=lambda clip: SMALL_CLIP_BYTES)
-        finished = sliding_window(grouped, window, process.submit, first_done)
-        done = [len(batch) for batch, future in finished if future.state.is_completed()]
-        return sum(done), len(done)
+        finished = sliding_window(range(n), window, process.submit, first_done)
+        return sum(future.state.is_completed() for _, future in finished)
 
     with quick_flows():
         clips(1)
         start = time.perf_counter()
-        completed, tasks = clips(n_clips)
+        completed = clips(n_clips)
         seconds = time.perf_counter() - start
-    print(json.dumps({"seconds": seconds, "clips": completed, "tasks": tasks}))
+    print(json.dumps({"seconds": seconds, "tasks": completed}))
 
 
 def prefect_overhead(n_clips: int) -> dict:
@@ -592,7 +583,7 @@ def main(plan: Plan, out: Path, runner: str = DEFAULT_RUNNER) -> dict:
             overhead = prefect_overhead(plan.prefect_clips)
             results["prefect_overhead"] = overhead
             print(f"Prefect alone: {overhead['per_clip_ms']:.1f} ms per clip "
-                  "(one task per batch of small clips, as the build)")
+                  "(one task each, as the build)")
 
         query_db = scratch / "query-db"
         n_rows = write_query_database(query_db, plan.query_rows)

@@ -1,18 +1,13 @@
-"""The build flow: the library's build with one Prefect task per batch of clips.
+"""The build flow: the library's build with one Prefect task per clip.
 
 :class:`handdb.build.Build` plans the build, stores the X-ray tables and, at the end, writes
-the quarantine table and the run record. The clips to process are grouped, in order, into
-batches of consecutive small clips (:func:`handdb.build.batches.batches`: a large clip is a
-batch of its own), and each batch is one task, ``process <clip_id> (+<others>)``, that runs
-every stage and the commit of each of its clips in turn
-(:func:`handdb.build.batches.run_batch`), so that Prefect's cost per task is paid once per
-batch. Each clip's log line, outcome and artifact are recorded as soon as the clip is done,
-whatever its batch mates do. At most ``window`` tasks are in flight, a new one submitted as
-each finishes (:func:`handdb.build.window.sliding_window`), so memory is bounded by the
-largest clips in flight and a slow clip holds back no other batch. A task is retried only
-on I/O errors, and its retry redoes only the clips of its batch that failed; refused input
-comes back as a value and ends in the ``quarantine`` table. The flow publishes the build
-summary and each validated clip's depth errors as markdown artifacts.
+the quarantine table and the run record; each clip to process is one task,
+``process <clip_id>``, that runs :func:`handdb.build.process_clip` (every stage and the
+commit). At most ``window`` tasks are in flight, a new one submitted as each finishes
+(:func:`handdb.build.window.sliding_window`), so memory is bounded by the largest clips in
+flight and a slow clip holds back no other. A task is retried only on I/O errors; refused
+input comes back as a value and ends in the ``quarantine`` table. The flow publishes the
+build summary and each validated clip's depth errors as markdown artifacts.
 
 What the run's page in the Prefect UI shows is worded by :mod:`handdb.build.describe`: an
 INFO log line per clip (sent to the API; the terminal shows warnings only, see
@@ -56,14 +51,8 @@ from handdb.build import (
     BuildOptions,
     PlannedClip,
     StageFailed,
+    process_clip,
     summary_markdown,
-)
-from handdb.build.batches import (
-    BatchFailed,
-    BatchRecorder,
-    batch_name,
-    batches,
-    run_batch,
 )
 from handdb.build.describe import (
     OutcomeKind,
@@ -88,8 +77,8 @@ DB_KEY_DIGITS = 8
 DESCRIPTION = """\
 Build the handdb database from an inbox folder of hand keypoint clips.
 
-New and changed clips are processed, one task per batch of consecutive small clips (a
-large clip has its own), each clip from its first changed stage (ingest, bone lengths, gap filling, lifting, validation, export); unchanged clips
+New and changed clips are processed, one task per clip, each from its first changed
+stage (ingest, bone lengths, gap filling, lifting, validation, export); unchanged clips
 cost a hash each. Refused inputs go to the `quarantine` table, and every build writes a
 `runs` row.
 
@@ -123,22 +112,16 @@ def artifact_key(kind: str, clip_id: str) -> str:
     return re.sub(r"[^a-z0-9-]+", "-", f"{kind}-{clip_id}".lower()).strip("-")
 
 
-@task(name="process", task_run_name="process {name}", cache_policy=NO_CACHE, **IO_RETRIES)
-def process(batch: tuple[PlannedClip, ...], context: BuildContext, recorder: BatchRecorder,
-            name: str) -> list[ClipResult | Refusal | StageFailed]:
-    """Run a batch of clips' stages, committing and recording each as it ends.
-
-    ``name`` names the batch's clips (:func:`~handdb.build.batches.batch_name`).
-    """
-    return run_batch(batch, context, recorder)
-
-
-def _publish(item: PlannedClip, outcome: ClipResult | Refusal | StageFailed) -> None:
-    """Publish a validated clip's depth errors as its artifact (in its task's run)."""
+@task(name="process", task_run_name="process {item.clip_id}", cache_policy=NO_CACHE,
+      **IO_RETRIES)
+def process(item: PlannedClip, context: BuildContext) -> ClipResult | Refusal:
+    """Run one clip's stages and commit it; publish its validation."""
+    outcome = process_clip(item, context)
     if isinstance(outcome, ClipResult) and outcome.report is not None:
         create_markdown_artifact(markdown=outcome.report,
                                  key=artifact_key("validation", item.clip_id),
                                  description=f"depth validation of clip {item.clip_id}")
+    return outcome
 
 
 def first_done(futures: Collection[PrefectFuture]) -> PrefectFuture:
@@ -170,21 +153,18 @@ def _rename(name: str) -> None:
         client.update_flow_run(flow_run.id, name=name)
 
 
-def _failures(future: PrefectFuture) -> dict[str, StageFailed]:
-    """The stage failure of each clip a batch's task gave up on (``{}`` when completed).
-
-    A task that failed outside any stage fails every clip it did not record.
-    """
-    if future.state.is_completed():
-        return {}
+def _outcome(future: PrefectFuture) -> ClipResult | Refusal | StageFailed:
+    """The task's value, or the stage failure that ended it."""
+    state = future.state
+    if state.is_completed():
+        return future.result()
     try:
         future.result()
-    except BatchFailed as failed:
-        return failed.failures
+    except StageFailed as failure:
+        return failure
     except Exception as error:  # noqa: BLE001 - a task that failed outside any stage
-        return {"": StageFailed(str(future.task_run_id), "task", error)}
-    return {"": StageFailed(str(future.task_run_id), "task",
-                            RuntimeError(future.state.message or ""))}
+        return StageFailed(str(future.task_run_id), "task", error)
+    return StageFailed(str(future.task_run_id), "task", RuntimeError(state.message or ""))
 
 
 @flow(name=FLOW_NAME, description=DESCRIPTION, log_prints=False, validate_parameters=False,
@@ -216,27 +196,17 @@ def build(inbox: str, db: str, gap_fill: str | None = None, lift: str | None = N
                            run.summary.removed_temporaries)
         for repair in run.summary.repairs:
             logger.warning("repaired %s", repair)
-        def record(item: PlannedClip, outcome: ClipResult | Refusal | StageFailed) -> None:
-            _publish(item, outcome)
+        context, todo = run.context, run.todo
+        finished = sliding_window(todo, window, lambda item: process.submit(item, context),
+                                  first_done)
+        for item, future in finished:
+            outcome = _outcome(future)
             # a refusal is the input's, reported by the summary and the quarantine (a
             # warning would print it twice); a failure is the database storage's, worth the
             # terminal's attention
             failed = isinstance(outcome, StageFailed)
             logger.log(ERROR if failed else INFO, "%s", clip_line(item, outcome))
             run.record(item.clip_id, outcome)
-
-        context, recorder = run.context, BatchRecorder(record)
-        grouped = batches(run.todo, window)
-        finished = sliding_window(
-            grouped, window,
-            lambda batch: process.submit(batch, context, recorder, batch_name(batch)),
-            first_done)
-        for batch, future in finished:
-            failures = _failures(future)
-            for item in batch:
-                failure = failures.get(item.clip_id, failures.get(""))
-                if failure is not None:
-                    recorder(item, failure)
         summary = run.finish()
     # only a build that changed something becomes the latest version of the keyed summary
     key = summary_key(db) if summary.changed or summary.failed else None
